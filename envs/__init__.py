@@ -1,0 +1,1 @@
+"""Gymnasium environments of the 2D-RL paper's navigation task."""

@@ -1,0 +1,1 @@
+"""Two-dimensional evaluation reinforcement learning (2D-RL) for Stable-Baselines3."""
