@@ -16,6 +16,7 @@ sensor), so N robots stepped in one numpy call get exactly the noise N single ro
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 from functools import cache
 from statistics import NormalDist
@@ -34,8 +35,7 @@ BEARINGS = -np.deg2rad(22.5) * np.arange(16)  # clockwise-from-north bearings of
 _OFFSETS = ROBOT_RADIUS_CM * np.stack([np.sin(BEARINGS), np.cos(BEARINGS)], axis=1)
 SCALE = np.concatenate([np.full(N_SONAR, SONAR_MAX_CM - SONAR_MIN_CM), np.full(N_IR, IR_MAX_CM)])
 SHIFT = np.concatenate([np.full(N_SONAR, SONAR_MIN_CM), np.zeros(N_IR)])
-LOW = np.concatenate([np.full(N_SONAR, SONAR_MIN_CM), np.zeros(N_IR)])
-HIGH = np.concatenate([np.full(N_SONAR, SONAR_MAX_CM), np.full(N_IR, IR_MAX_CM)])
+_INV_SCALE = 1.0 / SCALE
 
 
 def exact_ranges(office: OfficeMap, positions: np.ndarray) -> np.ndarray:
@@ -48,7 +48,8 @@ def exact_ranges(office: OfficeMap, positions: np.ndarray) -> np.ndarray:
 
 def normalise(ranges_cm: np.ndarray) -> np.ndarray:
     """Saturate ranges ``(..., 32)`` as the real sensors do and scale them to [0, 1] (float32)."""
-    return ((np.clip(ranges_cm, LOW, HIGH) - SHIFT) / SCALE).astype(np.float32)
+    scaled = (ranges_cm - SHIFT) * _INV_SCALE
+    return np.clip(scaled, 0.0, 1.0, out=scaled).astype(np.float32)
 
 
 @cache
@@ -58,11 +59,15 @@ def _normal_table() -> np.ndarray:
     return np.array([dist.inv_cdf((k + 0.5) / 65536) for k in range(65536)])
 
 
-_SENSOR_IDS = np.arange(1, N_READINGS + 1, dtype=np.uint64)
+_SENSOR_IDS = np.arange(1, N_SONAR + 1, dtype=np.uint64)
 
 
 def _hash(keys: np.ndarray, steps: np.ndarray) -> np.ndarray:
-    """SplitMix64 of (key, step, sensor): ``(n, 32)`` uint64 from keys and steps ``(n,)``."""
+    """SplitMix64 of (key, step, sensor pair): ``(n, 16)`` uint64 from keys and steps ``(n,)``.
+
+    Word ``j`` feeds sonar ``j`` and infrared ``j``: its four 16-bit lanes are the sonar drop-out
+    draw, (unused), the infrared Gaussian index and the sonar Gaussian index.
+    """
     x = keys[:, None] + (steps.astype(np.uint64)[:, None] * np.uint64(64) + _SENSOR_IDS) * np.uint64(0x9E3779B97F4A7C15)
     x ^= x >> np.uint64(30)
     x *= np.uint64(0xBF58476D1CE4E5B9)
@@ -94,20 +99,29 @@ class NoiseModel:
         if not isinstance(self.dropout, int | float) or not 0 <= self.dropout <= 1:
             raise ValueError(f"NoiseModel.dropout must be in [0, 1], got {self.dropout!r}")
 
-    def apply(self, ranges_cm: np.ndarray, keys: np.ndarray, steps: np.ndarray) -> np.ndarray:
-        """Noisy ranges ``(n, 32)`` in cm from exact ranges, episode keys and step counters ``(n,)``."""
-        bits = _hash(keys, steps)
-        z = _normal_table()[(bits >> np.uint64(48)).astype(np.intp)]
-        sd = np.concatenate(
-            [
-                self.sonar_sd_cm + self.sonar_sd_frac * ranges_cm[:, :N_SONAR],
-                self.ir_sd_cm + self.ir_sd_frac * ranges_cm[:, N_SONAR:],
-            ],
-            axis=1,
-        )
-        noisy = ranges_cm + sd * z
-        dropped = (bits[:, :N_SONAR] & np.uint64(0xFFFF)) < np.uint64(round(self.dropout * 65536))
-        noisy[:, :N_SONAR][dropped] = SONAR_MAX_CM
+    def sd(self, ranges_cm: np.ndarray) -> np.ndarray:
+        """Noise standard deviation ``(..., 32)`` of exact ranges (cm)."""
+        frac = np.concatenate([np.full(N_SONAR, self.sonar_sd_frac), np.full(N_IR, self.ir_sd_frac)])
+        base = np.concatenate([np.full(N_SONAR, self.sonar_sd_cm), np.full(N_IR, self.ir_sd_cm)])
+        return base + frac * ranges_cm
+
+    def apply(
+        self, ranges_cm: np.ndarray, keys: np.ndarray, steps: np.ndarray, sd: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Noisy ranges ``(n, 32)`` in cm from exact ranges, episode keys and step counters ``(n,)``.
+
+        ``sd`` may pass ``self.sd(ranges_cm)`` precomputed (e.g. per lattice cell).
+        """
+        lanes = _hash(keys, steps).view(np.uint16).reshape(len(keys), N_SONAR, 4)
+        if sys.byteorder == "big":
+            lanes = lanes[..., ::-1]
+        table = _normal_table()
+        sd = self.sd(ranges_cm) if sd is None else sd
+        noisy = np.empty_like(ranges_cm)
+        np.multiply(sd[:, :N_SONAR], table[lanes[..., 3]], out=noisy[:, :N_SONAR])
+        np.multiply(sd[:, N_SONAR:], table[lanes[..., 2]], out=noisy[:, N_SONAR:])
+        noisy += ranges_cm
+        np.copyto(noisy[:, :N_SONAR], SONAR_MAX_CM, where=lanes[..., 0] < round(self.dropout * 65536))
         return noisy
 
 
