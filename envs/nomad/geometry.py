@@ -174,11 +174,11 @@ def cone_ranges(origins: np.ndarray, bearings: np.ndarray, half_angle: float, wa
     point of a segment clipped to a convex cone is a clipped end or the segment's closest point, so
     the minimum over those candidates is exact. Returns ``(..., s)``; ``inf`` where nothing is seen.
     """
+    if half_angle == 0.0:
+        return _ray_hits(origins, bearings, walls).min(axis=-1)
     best = np.minimum(
         _ray_hits(origins, bearings - half_angle, walls), _ray_hits(origins, bearings + half_angle, walls)
     ).min(axis=-1)
-    if half_angle == 0.0:
-        return best
     axis = np.stack([np.sin(bearings), np.cos(bearings)], axis=-1)[..., None, :]
     cos_half = np.cos(half_angle)
     a, d = walls[:, :2], walls[:, 2:] - walls[:, :2]
