@@ -11,10 +11,11 @@ from envs.nomad.batched import BatchedNomadOffice, make_sb3_vec_env
 N_ENVS, STEPS, SEED = 6, 150, 11
 
 
-@pytest.mark.parametrize("sensor_noise", [False, True])
-def test_batched_equals_single_envs(sensor_noise):
-    batched = BatchedNomadOffice(N_ENVS, sensor_noise=sensor_noise, max_episode_steps=40)
-    singles = [gym.make("envs:NomadOffice-v0", sensor_noise=sensor_noise, max_episode_steps=40) for _ in range(N_ENVS)]
+@pytest.mark.parametrize(("sensor_noise", "odometry"), [(False, True), (True, True), (True, False)])
+def test_batched_equals_single_envs(sensor_noise, odometry):
+    kwargs = {"sensor_noise": sensor_noise, "observe_odometry": odometry, "max_episode_steps": 40}
+    batched = BatchedNomadOffice(N_ENVS, **kwargs)
+    singles = [gym.make("envs:NomadOffice-v0", **kwargs) for _ in range(N_ENVS)]
     obs, _ = batched.reset(seed=SEED)
     single_obs = [env.reset(seed=SEED + i)[0] for i, env in enumerate(singles)]
     np.testing.assert_array_equal(obs, np.stack(single_obs))

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from envs.nomad.geometry import ROBOT_RADIUS_CM, load_map, swept_clearance
-from envs.nomad.sensors import exact_ranges, normalise
+from envs.nomad.office import office_core
+from envs.nomad.sensors import NoiseModel, exact_ranges, normalise, realistic_readings
 
 OFFICE = load_map()
 
@@ -96,3 +97,18 @@ def test_missing_and_malformed_map_files(tmp_path):
         load_map(bad)
     with pytest.raises(TypeError, match="map must be a path"):
         load_map(42)
+
+
+def test_sensor_source_seam_for_databases():
+    core = office_core()
+    assert core.readings.shape == (len(core.lattice.cells), 32) and core.lattice.reachable.all()
+    assert core.lattice.index(OFFICE.start) == core.start_cell and core.lattice.index((91.0, 60.0)) == -1
+    cells = np.repeat(core.lattice.cells[:3], 4, axis=0)  # K = 4 recordings of 3 cells
+    recorded = realistic_readings(OFFICE, cells, NoiseModel(), np.random.default_rng(0))
+    assert recorded.shape == (12, 32) and recorded.dtype == np.float32
+    assert recorded.min() >= 0.0 and recorded.max() <= 1.0
+    assert not np.array_equal(recorded[0], recorded[1])
+    np.testing.assert_allclose(
+        realistic_readings(OFFICE, cells, NoiseModel(0, 0, 0, 0, 0), np.random.default_rng(0)),
+        np.repeat(core.readings[:3], 4, axis=0),
+    )

@@ -63,7 +63,7 @@ def load_map(path: str | Path | None = None) -> OfficeMap:
     """
     if path is not None and not isinstance(path, str | Path):
         raise TypeError(f"map must be a path (str or pathlib.Path) or None, got {type(path).__name__}: {path!r}")
-    source = str(default_map_path() if path is None else Path(path))
+    source = str((default_map_path() if path is None else Path(path)).resolve())
     try:
         data = json.loads(Path(source).read_text())
     except FileNotFoundError as err:

@@ -84,7 +84,9 @@ def office_core(map_path: str | Path | None = None) -> OfficeCore:
 
 def episode_keys(base: np.ndarray, episode: np.ndarray) -> np.ndarray:
     """Noise key of each episode, derived from a seeded base key and the episode counter."""
-    return sensors._hash(base + episode.astype(np.uint64) * _GOLDEN, np.zeros(len(base), dtype=np.int64))[:, 0].copy()
+    return sensors.counter_hash(base + episode.astype(np.uint64) * _GOLDEN, np.zeros(len(base), dtype=np.int64))[
+        :, 0
+    ].copy()
 
 
 def _sensor_noise(value: object) -> NoiseModel | None:

@@ -62,7 +62,7 @@ def _normal_table() -> np.ndarray:
 _SENSOR_IDS = np.arange(1, N_SONAR + 1, dtype=np.uint64)
 
 
-def _hash(keys: np.ndarray, steps: np.ndarray) -> np.ndarray:
+def counter_hash(keys: np.ndarray, steps: np.ndarray) -> np.ndarray:
     """SplitMix64 of (key, step, sensor pair): ``(n, 16)`` uint64 from keys and steps ``(n,)``.
 
     Word ``j`` feeds sonar ``j`` and infrared ``j``: its four 16-bit lanes are the sonar drop-out
@@ -112,7 +112,7 @@ class NoiseModel:
 
         ``sd`` may pass ``self.sd(ranges_cm)`` precomputed (e.g. per lattice cell).
         """
-        lanes = _hash(keys, steps).view(np.uint16).reshape(len(keys), N_SONAR, 4)
+        lanes = counter_hash(keys, steps).view(np.uint16).reshape(len(keys), N_SONAR, 4)
         if sys.byteorder == "big":
             lanes = lanes[..., ::-1]
         table = _normal_table()
