@@ -28,21 +28,24 @@ def td_errors_and_gae(
     episode_starts: np.ndarray,
     last_values: np.ndarray,
     dones: np.ndarray,
-    gamma: float,
-    gae_lambda: float,
+    gamma: np.ndarray,
+    gamma_lambda: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """TD errors (eq. 7-8) and GAE(lambda) advantages of one stream; arrays of shape ``(n_steps, n_envs)``.
+    """TD errors (eq. 7-8) and GAE(lambda) advantages of several streams at once.
 
-    Same arithmetic as SB3's ``RolloutBuffer.compute_returns_and_advantage``; with
-    ``gae_lambda=0`` the advantages are the TD errors themselves.
+    ``rewards`` and ``values`` are ``(n_steps, n_streams, n_envs)``, ``last_values``
+    ``(n_streams, n_envs)``, ``episode_starts`` ``(n_steps, n_envs)``; ``gamma`` and
+    ``gamma_lambda`` (``gamma * gae_lambda``) are float32 ``(n_streams, 1)``. Same float32
+    arithmetic as SB3's ``RolloutBuffer.compute_returns_and_advantage``; with ``gae_lambda = 0``
+    the advantages are the TD errors themselves.
     """
     next_values = np.concatenate([values[1:], last_values[None]])
-    next_non_terminal = 1.0 - np.concatenate([episode_starts[1:], dones[None].astype(np.float32)])
+    next_non_terminal = 1.0 - np.concatenate([episode_starts[1:], dones[None].astype(np.float32)])[:, None, :]
     deltas = rewards + gamma * next_values * next_non_terminal - values
     advantages = np.zeros_like(rewards)
     last_gae_lam = 0
     for step in reversed(range(len(rewards))):
-        last_gae_lam = deltas[step] + gamma * gae_lambda * next_non_terminal[step] * last_gae_lam
+        last_gae_lam = deltas[step] + gamma_lambda * next_non_terminal[step] * last_gae_lam
         advantages[step] = last_gae_lam
     return deltas, advantages
 
@@ -99,37 +102,31 @@ class TwoDimBufferMixin:
         *args: Any,
         punishment: np.ndarray,
         punishment_value: th.Tensor,
-        inverse_temperature: th.Tensor,
+        inverse_temperature: np.ndarray,
         **kwargs: Any,
     ) -> None:
         """SB3's ``add`` plus ``r_P``, ``V_P(s)`` and the inverse temperature the action was drawn with."""
         self.punishments[self.pos] = punishment
         self.punishment_values[self.pos] = punishment_value.cpu().numpy().flatten()
-        self.inverse_temperatures[self.pos] = inverse_temperature.cpu().numpy()
+        self.inverse_temperatures[self.pos] = inverse_temperature
         super().add(*args, **kwargs)  # type: ignore[misc]
 
     def compute_returns_and_advantage(  # type: ignore[override]
         self, last_values: th.Tensor, dones: np.ndarray, last_punishment_values: th.Tensor
     ) -> None:
         """Per stream TD errors and GAE with its own gamma and lambda; the utility is the actor's advantage."""
-        reward_deltas, reward_advantages = td_errors_and_gae(
-            self.rewards,
-            self.values,
+        discounts = ((self.gamma, self.gae_lambda), (self.punishment_gamma, self.punishment_gae_lambda))
+        deltas, advantages = td_errors_and_gae(
+            np.stack([self.rewards, self.punishments], axis=1),
+            np.stack([self.values, self.punishment_values], axis=1),
             self.episode_starts,
-            last_values.cpu().numpy().flatten(),
+            np.stack([last_values.cpu().numpy().flatten(), last_punishment_values.cpu().numpy().flatten()]),
             dones,
-            self.gamma,
-            self.gae_lambda,
+            np.array([[gamma] for gamma, _ in discounts], dtype=np.float32),
+            np.array([[gamma * lam] for gamma, lam in discounts], dtype=np.float32),
         )
-        punishment_deltas, punishment_advantages = td_errors_and_gae(
-            self.punishments,
-            self.punishment_values,
-            self.episode_starts,
-            last_punishment_values.cpu().numpy().flatten(),
-            dones,
-            self.punishment_gamma,
-            self.punishment_gae_lambda,
-        )
+        reward_deltas, punishment_deltas = deltas[:, 0], deltas[:, 1]
+        reward_advantages, punishment_advantages = advantages[:, 0], advantages[:, 1]
         self.advantages = reward_advantages - self.punishment_weight * punishment_advantages
         self.returns = reward_advantages + self.values
         self.punishment_returns = punishment_advantages + self.punishment_values

@@ -2,7 +2,8 @@
 
 2D-RL needs a reward evaluation ``r_R`` and a punishment evaluation ``r_P >= 0`` per step.
 Gymnasium environments hand back one scalar reward and an ``info`` dict; a *reward split*
-maps ``(reward, info)`` to ``(r_R, r_P)``.
+maps them to ``(r_R, r_P)``. The named modes work on a whole vectorised step at once; a user's
+callable maps one env's ``(reward, info)``.
 """
 
 from collections.abc import Callable, Sequence
@@ -11,62 +12,74 @@ from typing import Any
 import numpy as np
 
 RewardSplit = Callable[[float, dict[str, Any]], tuple[float, float]]
+BatchSplit = Callable[[np.ndarray, Sequence[dict[str, Any]]], tuple[np.ndarray, np.ndarray]]
 
 SPLIT_MODES = ("auto", "info", "cost", "sign")
 
 
-def split_info(reward: float, info: dict[str, Any]) -> tuple[float, float]:
+def _info_values(infos: Sequence[dict[str, Any]], key: str) -> np.ndarray:
+    return np.array([info[key] for info in infos], dtype=np.float64)
+
+
+def split_info(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
     """The scalar reward is the net ``r_R - r_P`` and ``info["punishment"]`` holds ``r_P``."""
-    punishment = float(info["punishment"])
-    return reward + punishment, punishment
+    punishments = _info_values(infos, "punishment")
+    return rewards + punishments, punishments
 
 
-def split_cost(reward: float, info: dict[str, Any]) -> tuple[float, float]:
+def split_cost(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
     """Safety-Gymnasium convention: ``r_R = reward``, ``r_P = info["cost"]``."""
-    return reward, float(info["cost"])
+    return rewards, _info_values(infos, "cost")
 
 
-def split_sign(reward: float, info: dict[str, Any]) -> tuple[float, float]:
-    """Positive part of the reward is ``r_R``, negative part is ``r_P``."""
-    return max(reward, 0.0), max(-reward, 0.0)
+def split_sign(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
+    """The positive part of the reward is ``r_R``, the negative part ``r_P``."""
+    return np.maximum(rewards, 0.0), np.maximum(-rewards, 0.0)
 
 
-def split_auto(reward: float, info: dict[str, Any]) -> tuple[float, float]:
-    """``info`` if ``info["punishment"]`` exists, else ``cost`` if ``info["cost"]`` exists, else ``sign``."""
-    if "punishment" in info:
-        return split_info(reward, info)
-    if "cost" in info:
-        return split_cost(reward, info)
-    return split_sign(reward, info)
+def split_auto(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
+    """Per env: ``info`` if ``info["punishment"]`` exists, else ``cost`` if ``info["cost"]`` exists, else ``sign``."""
+    if all("punishment" in info for info in infos):
+        return split_info(rewards, infos)
+    reward_r, reward_p = split_sign(rewards, infos)
+    for idx, info in enumerate(infos):
+        if "punishment" in info:
+            reward_r[idx], reward_p[idx] = rewards[idx] + info["punishment"], info["punishment"]
+        elif "cost" in info:
+            reward_r[idx], reward_p[idx] = rewards[idx], info["cost"]
+    return reward_r, reward_p
 
 
-_SPLITS: dict[str, RewardSplit] = {"auto": split_auto, "info": split_info, "cost": split_cost, "sign": split_sign}
+_SPLITS: dict[str, BatchSplit] = {"auto": split_auto, "info": split_info, "cost": split_cost, "sign": split_sign}
 
 
-def make_reward_split(reward_split: str | RewardSplit) -> RewardSplit:
-    """Resolve a ``reward_split`` argument (a mode name or a callable) to a function."""
-    if callable(reward_split):
-        return reward_split
+def make_reward_split(reward_split: str | RewardSplit) -> BatchSplit:
+    """Resolve a ``reward_split`` argument (a mode name or a per-env callable) to a batch function."""
     if isinstance(reward_split, str) and reward_split in _SPLITS:
         return _SPLITS[reward_split]
+    if callable(reward_split):
+
+        def split_each(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
+            pairs = [reward_split(float(r), info) for r, info in zip(rewards, infos, strict=True)]
+            return tuple(np.array(pairs, dtype=np.float64).reshape(-1, 2).T)  # type: ignore[return-value]
+
+        return split_each
     raise ValueError(
         f"reward_split must be one of {SPLIT_MODES} or a callable (reward, info) -> (r_R, r_P), got {reward_split!r}"
     )
 
 
 def split_rewards(
-    reward_split: RewardSplit, rewards: np.ndarray, infos: Sequence[dict[str, Any]], timestep: int
+    reward_split: BatchSplit, rewards: np.ndarray, infos: Sequence[dict[str, Any]], timestep: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """Split one vectorised step's rewards into float32 arrays ``(r_R, r_P)``.
 
     :raises ValueError: if a reward is not finite or a punishment is negative or not finite,
         naming the env index and the timestep where it appeared.
     """
-    pairs = [reward_split(float(reward), info) for reward, info in zip(rewards, infos, strict=True)]
-    reward_r, reward_p = np.array(pairs, dtype=np.float64).reshape(-1, 2).T
-    bad = ~(np.isfinite(reward_r) & np.isfinite(reward_p) & (reward_p >= 0.0))
-    if bad.any():
-        idx = int(np.flatnonzero(bad)[0])
+    reward_r, reward_p = reward_split(rewards.astype(np.float64), infos)
+    if not (np.isfinite(reward_r + reward_p).all() and (reward_p >= 0.0).all()):
+        idx = int(np.flatnonzero(~(np.isfinite(reward_r) & np.isfinite(reward_p) & (reward_p >= 0.0)))[0])
         raise ValueError(
             f"reward split gave (r_R, r_P) = ({reward_r[idx]}, {reward_p[idx]}) for env {idx} at timestep {timestep}: "
             "r_R must be finite and the punishment r_P finite and >= 0"

@@ -25,6 +25,10 @@ from sb3_twodrl.splitting import RewardSplit, make_reward_split, split_rewards
 SelfTwoDimA2C = TypeVar("SelfTwoDimA2C", bound="TwoDimA2C")
 
 
+def _flat(values: th.Tensor) -> np.ndarray:
+    return values.cpu().numpy().flatten()
+
+
 class _Transition(NamedTuple):
     """The last vectorised step: observations before and after, and its (unbootstrapped) evaluations."""
 
@@ -171,7 +175,7 @@ class TwoDimA2C(A2C):
     def _excluded_save_params(self) -> list[str]:
         return [*super()._excluded_save_params(), "_last_transition", "_reward_split"]
 
-    def _values_before_last_transition(self) -> tuple[th.Tensor, th.Tensor] | None:
+    def _values_before_last_transition(self) -> tuple[np.ndarray, np.ndarray] | None:
         """Current critics' ``V_R``, ``V_P`` of the state each env left by its last transition.
 
         None when there is no transition into the current observation (first rollout, or the
@@ -180,25 +184,21 @@ class TwoDimA2C(A2C):
         transition = self._last_transition
         if transition is None or transition.next_obs is not self._last_obs:
             return None
-        _, values, punishment_values = self.policy.evaluate_state(obs_as_tensor(transition.obs, self.device))
-        return values, punishment_values
+        values, punishment_values = self.policy.predict_critics(obs_as_tensor(transition.obs, self.device))
+        return _flat(values), _flat(punishment_values)
 
     def _interest(
-        self, previous: tuple[th.Tensor, th.Tensor] | None, values: th.Tensor, punishment_values: th.Tensor
-    ) -> th.Tensor:
+        self, previous: tuple[np.ndarray, np.ndarray] | None, values: np.ndarray, punishment_values: np.ndarray
+    ) -> np.ndarray:
         """Interest ``|delta_R| + |delta_P|`` (eq. 2, 7, 8) of the transition into each env's current state.
 
         An env whose current state starts an episode (or that has no known transition) has interest 0.
         """
-        if previous is None:
-            return th.zeros(len(values), device=self.device)
-        assert self._last_transition is not None
-        reward = th.as_tensor(self._last_transition.reward, device=self.device)
-        punishment = th.as_tensor(self._last_transition.punishment, device=self.device)
-        delta_r = reward + self.gamma * values.flatten() - previous[0].flatten()
-        delta_p = punishment + self.punishment_gamma * punishment_values.flatten() - previous[1].flatten()
-        starts = th.as_tensor(self._last_episode_starts, device=self.device, dtype=th.bool)
-        return th.where(starts, 0.0, delta_r.abs() + delta_p.abs())
+        if previous is None or self._last_transition is None:
+            return np.zeros(len(values), dtype=np.float32)
+        delta_r = self._last_transition.reward + self.gamma * values - previous[0]
+        delta_p = self._last_transition.punishment + self.punishment_gamma * punishment_values - previous[1]
+        return (np.abs(delta_r) + np.abs(delta_p)) * (1.0 - self._last_episode_starts)
 
     def collect_rollouts(
         self,
@@ -221,7 +221,8 @@ class TwoDimA2C(A2C):
             with th.no_grad():
                 obs_tensor = obs_as_tensor(self._last_obs, self.device)  # type: ignore[arg-type]
                 latent_pi, values, punishment_values = self.policy.evaluate_state(obs_tensor)
-                interest = self._interest(previous, values, punishment_values)
+                step_values = _flat(values), _flat(punishment_values)
+                interest = self._interest(previous, *step_values)
                 inverse_temperature = self.policy.inverse_temperature(interest)
                 distribution = self.policy.tempered_distribution(latent_pi, inverse_temperature)
                 actions = distribution.get_actions()
@@ -250,7 +251,7 @@ class TwoDimA2C(A2C):
 
             rewards, punishments = split_rewards(self._reward_split, rewards, infos, self.num_timesteps)
             self._last_transition = _Transition(self._last_obs, new_obs, rewards.copy(), punishments.copy())
-            previous = (values, punishment_values) if use_interest else None
+            previous = step_values if use_interest else None
             # Bootstrap both critics on time-limit truncation, as SB3 does (GitHub issue #633)
             for idx, done in enumerate(dones):
                 if (
@@ -260,7 +261,7 @@ class TwoDimA2C(A2C):
                 ):
                     terminal_obs = self.policy.obs_to_tensor(infos[idx]["terminal_observation"])[0]
                     with th.no_grad():
-                        _, terminal_value, terminal_punishment_value = self.policy.evaluate_state(terminal_obs)
+                        terminal_value, terminal_punishment_value = self.policy.predict_critics(terminal_obs)
                     rewards[idx] += self.gamma * terminal_value[0]
                     punishments[idx] += self.punishment_gamma * terminal_punishment_value[0]
 
@@ -279,7 +280,7 @@ class TwoDimA2C(A2C):
             self._last_episode_starts = dones
 
         with th.no_grad():
-            _, values, punishment_values = self.policy.evaluate_state(obs_as_tensor(new_obs, self.device))  # type: ignore[arg-type]
+            values, punishment_values = self.policy.predict_critics(obs_as_tensor(new_obs, self.device))  # type: ignore[arg-type]
         rollout_buffer.compute_returns_and_advantage(
             last_values=values, dones=dones, last_punishment_values=punishment_values
         )
