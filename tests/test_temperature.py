@@ -1,0 +1,90 @@
+"""Interest as the softmax temperature (eq. 2, 9) and the actor's update (eq. 10)."""
+
+import copy
+
+import numpy as np
+import pytest
+import torch as th
+from gymnasium.wrappers import TimeLimit
+from stable_baselines3.common.env_util import make_vec_env
+
+from sb3_twodrl import TwoDimA2C
+from tests.toy_envs import LatticeCorridor
+
+
+def action_probabilities(model: TwoDimA2C, interest: float) -> np.ndarray:
+    policy = model.policy
+    obs = th.zeros((1, *model.observation_space.shape))
+    with th.no_grad():
+        latent_pi = policy._actor_latent(obs)
+        distribution = policy.tempered_distribution(latent_pi, policy.inverse_temperature(np.array([interest])))
+    return distribution.distribution.probs.numpy()[0]
+
+
+@pytest.fixture
+def biased_model() -> TwoDimA2C:
+    """A model whose actor strongly prefers action 2, whatever the state."""
+    model = TwoDimA2C("MlpPolicy", LatticeCorridor(), seed=0)
+    with th.no_grad():
+        model.policy.action_net.bias.copy_(th.tensor([0.0, 0.5, 1.0, 0.2]))
+    return model
+
+
+def test_zero_interest_means_uniform_actions(biased_model: TwoDimA2C) -> None:
+    np.testing.assert_allclose(action_probabilities(biased_model, 0.0), 0.25, atol=1e-6)
+
+
+def test_more_interest_means_more_exploration(biased_model: TwoDimA2C) -> None:
+    sharp, mild, flat = (action_probabilities(biased_model, i).max() for i in (0.2, 1.0, 5.0))
+    assert sharp > mild > flat > 0.25
+
+
+def test_floor_stops_interest_from_freezing_the_policy(biased_model: TwoDimA2C) -> None:
+    """A collapsing interest is clamped: the policy stays as random as at ``min_temperature``."""
+    at_floor = action_probabilities(biased_model, biased_model.policy.min_temperature)
+    np.testing.assert_allclose(action_probabilities(biased_model, 1e-9), at_floor, rtol=1e-5)
+    assert at_floor.max() < 1.0 - 1e-3
+
+
+def test_first_action_of_each_episode_is_uniform() -> None:
+    model = TwoDimA2C("MlpPolicy", LatticeCorridor(), n_steps=64, seed=0).learn(64)
+    buffer = model.rollout_buffer
+    starts = buffer.episode_starts.astype(bool)
+    assert starts.any() and (buffer.inverse_temperatures[starts] == 0).all()
+    assert (buffer.inverse_temperatures[~starts] > 0).all()
+
+
+def test_actor_update_does_not_depend_on_the_temperature() -> None:
+    """Design choice: the gradient flows through the raw preferences (eq. 10 has no temperature)."""
+    model = TwoDimA2C("MlpPolicy", LatticeCorridor(), temperature=0.2, seed=0, n_steps=16).learn(16)
+    policy_state = copy.deepcopy(model.policy.state_dict())
+    optimizer_state = copy.deepcopy(model.policy.optimizer.state_dict())
+    updated = []
+    for temperature in (0.2, 5.0):
+        model.policy.load_state_dict(policy_state)
+        model.policy.optimizer.load_state_dict(copy.deepcopy(optimizer_state))
+        model.policy.temperature = temperature
+        model.rollout_buffer.inverse_temperatures[:] = 1.0 / temperature
+        np.random.seed(0)
+        model.train()
+        updated.append(copy.deepcopy(model.policy.state_dict()))
+    assert not th.equal(updated[0]["action_net.weight"], policy_state["action_net.weight"])
+    for name, tensor in updated[0].items():
+        assert th.equal(updated[1][name], tensor), name
+
+
+def test_default_run_does_not_freeze() -> None:
+    """With the default floor, learning keeps exploring and finds the goal; no episode wanders to the time limit."""
+    env = make_vec_env(lambda: TimeLimit(LatticeCorridor(8, 4), 60), n_envs=4, seed=0)
+    model = TwoDimA2C("MlpPolicy", env, gamma=0.9, seed=0).learn(8_000)
+    test_env = TimeLimit(LatticeCorridor(8, 4), 60)
+    outcomes = []
+    for episode in range(30):
+        obs, _ = test_env.reset(seed=1_000 + episode)
+        terminated = truncated = False
+        while not (terminated or truncated):
+            action, _ = model.predict(obs, deterministic=False)
+            obs, _, terminated, truncated, info = test_env.step(action)
+        outcomes.append("goal" if info["is_success"] else "time limit" if truncated else "collision")
+    assert outcomes.count("time limit") == 0
+    assert outcomes.count("goal") >= 20
