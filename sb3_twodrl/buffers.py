@@ -1,0 +1,155 @@
+"""Rollout buffers that keep the reward and the punishment stream apart (eq. 1-8)."""
+
+from collections.abc import Generator
+from typing import Any, NamedTuple
+
+import numpy as np
+import torch as th
+from stable_baselines3.common.buffers import DictRolloutBuffer, RolloutBuffer
+from stable_baselines3.common.type_aliases import PyTorchObs
+from stable_baselines3.common.vec_env import VecNormalize
+
+
+class TwoDimRolloutBufferSamples(NamedTuple):
+    """SB3's rollout samples (``advantages`` being the utility) plus the punishment critic's target."""
+
+    observations: PyTorchObs
+    actions: th.Tensor
+    old_values: th.Tensor
+    old_log_prob: th.Tensor
+    advantages: th.Tensor
+    returns: th.Tensor
+    punishment_returns: th.Tensor
+
+
+def td_errors_and_gae(
+    rewards: np.ndarray,
+    values: np.ndarray,
+    episode_starts: np.ndarray,
+    last_values: np.ndarray,
+    dones: np.ndarray,
+    gamma: float,
+    gae_lambda: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """TD errors (eq. 7-8) and GAE(lambda) advantages of one stream; arrays of shape ``(n_steps, n_envs)``.
+
+    Same arithmetic as SB3's ``RolloutBuffer.compute_returns_and_advantage``; with
+    ``gae_lambda=0`` the advantages are the TD errors themselves.
+    """
+    next_values = np.concatenate([values[1:], last_values[None]])
+    next_non_terminal = 1.0 - np.concatenate([episode_starts[1:], dones[None].astype(np.float32)])
+    deltas = rewards + gamma * next_values * next_non_terminal - values
+    advantages = np.zeros_like(rewards)
+    last_gae_lam = 0
+    for step in reversed(range(len(rewards))):
+        last_gae_lam = deltas[step] + gamma * gae_lambda * next_non_terminal[step] * last_gae_lam
+        advantages[step] = last_gae_lam
+    return deltas, advantages
+
+
+class TwoDimBufferMixin:
+    """Two-stream storage and advantage computation shared by the flat and the ``Dict`` buffer.
+
+    Per step it stores ``r_P``, ``V_P`` and the inverse temperature used to act. After
+    ``compute_returns_and_advantage``: ``advantages`` is the utility ``A_R - w * A_P`` (eq. 1 with
+    GAE per stream), ``returns`` the reward critic's target, ``punishment_returns`` the punishment
+    critic's, ``interests`` the per-step ``|delta_R| + |delta_P|`` (eq. 2) and ``utilities`` the
+    per-step ``delta_R - delta_P`` (eq. 1).
+
+    :param punishment_gamma: discount of the punishment stream (eq. 4)
+    :param punishment_gae_lambda: GAE lambda of the punishment stream
+    :param punishment_weight: weight ``w`` of the punishment advantage in the utility
+    """
+
+    buffer_size: int
+    n_envs: int
+    pos: int
+    generator_ready: bool
+    rewards: np.ndarray
+    values: np.ndarray
+    episode_starts: np.ndarray
+    gamma: float
+    gae_lambda: float
+
+    def __init__(
+        self,
+        *args: Any,
+        punishment_gamma: float = 0.1,
+        punishment_gae_lambda: float = 1.0,
+        punishment_weight: float = 1.0,
+        **kwargs: Any,
+    ):
+        self.punishment_gamma = punishment_gamma
+        self.punishment_gae_lambda = punishment_gae_lambda
+        self.punishment_weight = punishment_weight
+        super().__init__(*args, **kwargs)
+
+    def reset(self) -> None:
+        shape = (self.buffer_size, self.n_envs)
+        self.punishments = np.zeros(shape, dtype=np.float32)
+        self.punishment_values = np.zeros(shape, dtype=np.float32)
+        self.punishment_returns = np.zeros(shape, dtype=np.float32)
+        self.inverse_temperatures = np.zeros(shape, dtype=np.float32)
+        self.interests = np.zeros(shape, dtype=np.float32)
+        self.utilities = np.zeros(shape, dtype=np.float32)
+        super().reset()  # type: ignore[misc]
+
+    def add(
+        self,
+        *args: Any,
+        punishment: np.ndarray,
+        punishment_value: th.Tensor,
+        inverse_temperature: th.Tensor,
+        **kwargs: Any,
+    ) -> None:
+        """SB3's ``add`` plus ``r_P``, ``V_P(s)`` and the inverse temperature the action was drawn with."""
+        self.punishments[self.pos] = punishment
+        self.punishment_values[self.pos] = punishment_value.cpu().numpy().flatten()
+        self.inverse_temperatures[self.pos] = inverse_temperature.cpu().numpy()
+        super().add(*args, **kwargs)  # type: ignore[misc]
+
+    def compute_returns_and_advantage(  # type: ignore[override]
+        self, last_values: th.Tensor, dones: np.ndarray, last_punishment_values: th.Tensor
+    ) -> None:
+        """Per stream TD errors and GAE with its own gamma and lambda; the utility is the actor's advantage."""
+        reward_deltas, reward_advantages = td_errors_and_gae(
+            self.rewards,
+            self.values,
+            self.episode_starts,
+            last_values.cpu().numpy().flatten(),
+            dones,
+            self.gamma,
+            self.gae_lambda,
+        )
+        punishment_deltas, punishment_advantages = td_errors_and_gae(
+            self.punishments,
+            self.punishment_values,
+            self.episode_starts,
+            last_punishment_values.cpu().numpy().flatten(),
+            dones,
+            self.punishment_gamma,
+            self.punishment_gae_lambda,
+        )
+        self.advantages = reward_advantages - self.punishment_weight * punishment_advantages
+        self.returns = reward_advantages + self.values
+        self.punishment_returns = punishment_advantages + self.punishment_values
+        self.interests = np.abs(reward_deltas) + np.abs(punishment_deltas)
+        self.utilities = reward_deltas - punishment_deltas
+
+    def get(self, batch_size: int | None = None) -> Generator[TwoDimRolloutBufferSamples, None, None]:
+        if not self.generator_ready:
+            self.punishment_returns = self.swap_and_flatten(self.punishment_returns)  # type: ignore[attr-defined]
+        yield from super().get(batch_size)  # type: ignore[misc]
+
+    def _get_samples(self, batch_inds: np.ndarray, env: VecNormalize | None = None) -> TwoDimRolloutBufferSamples:
+        samples = super()._get_samples(batch_inds, env)  # type: ignore[misc]
+        punishment_returns = self.to_torch(self.punishment_returns[batch_inds].flatten())  # type: ignore[attr-defined]
+        return TwoDimRolloutBufferSamples(*samples, punishment_returns=punishment_returns)
+
+
+class TwoDimRolloutBuffer(TwoDimBufferMixin, RolloutBuffer):
+    """Two-stream rollout buffer for flat observations."""
+
+
+class TwoDimDictRolloutBuffer(TwoDimBufferMixin, DictRolloutBuffer):
+    """Two-stream rollout buffer for ``Dict`` observations."""

@@ -1,0 +1,181 @@
+"""Actor-critic policy with a reward critic, a punishment critic and a tempered action distribution.
+
+The actor keeps SB3's action network: its outputs are the preferences ``p(s, a)`` of eq. 9-10.
+Actions are drawn from the softmax of ``p / T`` (eq. 9), ``T`` being the interest ``delta+``
+(eq. 2) clamped to ``[min_temperature, max_temperature]``.
+"""
+
+import math
+from functools import partial
+from typing import Any
+
+import numpy as np
+import torch as th
+from gymnasium import spaces
+from stable_baselines3.common.distributions import DiagGaussianDistribution, Distribution
+from stable_baselines3.common.policies import ActorCriticPolicy, BaseModel
+from stable_baselines3.common.torch_layers import CombinedExtractor, NatureCNN, create_mlp
+from stable_baselines3.common.type_aliases import PyTorchObs
+from torch import nn
+
+INTEREST_EMA_RATE = 0.1
+"""Weight of the newest rollout's mean interest in the running estimate used by ``predict``."""
+
+SUPPORTED_ACTION_SPACES = (spaces.Discrete, spaces.MultiDiscrete, spaces.MultiBinary, spaces.Box)
+
+
+def check_temperature(temperature: str | float, min_temperature: float, max_temperature: float) -> None:
+    """Raise ``ValueError`` unless the temperature settings keep eq. 9 finite."""
+    if isinstance(temperature, str):
+        if temperature != "interest":
+            raise ValueError(f'temperature must be "interest" or a positive float, got {temperature!r}')
+    elif not (isinstance(temperature, (int, float)) and math.isfinite(temperature) and temperature > 0):
+        raise ValueError(f'temperature must be "interest" or a positive finite float, got {temperature!r}')
+    if not (isinstance(min_temperature, (int, float)) and math.isfinite(min_temperature) and min_temperature > 0):
+        raise ValueError(f"min_temperature must be a positive finite float, got {min_temperature!r}")
+    if not (isinstance(max_temperature, (int, float)) and math.isfinite(max_temperature)):
+        raise ValueError(f"max_temperature must be a finite float, got {max_temperature!r}")
+    if min_temperature > max_temperature:
+        raise ValueError(f"min_temperature ({min_temperature}) must not exceed max_temperature ({max_temperature})")
+
+
+class TwoDimActorCriticPolicy(ActorCriticPolicy):
+    """
+    Actor, reward critic ``V_R`` (SB3's value head) and punishment critic ``V_P`` (eq. 3-8).
+
+    ``V_P`` has its own MLP (the critic's ``net_arch``) on the critic's features, so the two
+    critics, which learn with very different discounts, do not compete for hidden units.
+    Its parameters are initialised without touching the global RNG, so that a seeded run draws
+    the same random numbers as stock A2C.
+
+    ``predict_values`` keeps SB3's meaning (``V_R``). ``evaluate_actions`` and ``forward`` use the
+    raw preferences (``T = 1``); rollout collection and ``predict`` sample from the tempered
+    distribution (eq. 9), ``predict`` with the running interest estimate saved with the policy.
+
+    :param temperature: ``"interest"`` (eq. 9 with ``T = delta+``) or a fixed positive temperature
+    :param min_temperature: floor of the interest temperature
+    :param max_temperature: ceiling of the interest temperature
+    :param args: positional arguments of ``ActorCriticPolicy``
+    :param kwargs: keyword arguments of ``ActorCriticPolicy``
+    """
+
+    def __init__(
+        self,
+        *args: Any,
+        temperature: str | float = "interest",
+        min_temperature: float = 0.1,
+        max_temperature: float = 10.0,
+        **kwargs: Any,
+    ):
+        check_temperature(temperature, min_temperature, max_temperature)
+        self.temperature = temperature
+        self.min_temperature = min_temperature
+        self.max_temperature = max_temperature
+        super().__init__(*args, **kwargs)
+        if not isinstance(self.action_space, SUPPORTED_ACTION_SPACES):
+            raise ValueError(f"action space {self.action_space} is not supported; use one of {SUPPORTED_ACTION_SPACES}")
+        if self.use_sde:
+            raise ValueError("use_sde=True is not supported: the temperature scales the Gaussian's own std")
+
+    def _build(self, lr_schedule: Any) -> None:
+        super()._build(lr_schedule)
+        vf_arch = self.net_arch["vf"] if isinstance(self.net_arch, dict) else self.net_arch
+        with th.random.fork_rng(devices=[]):
+            self.punishment_value_net = nn.Sequential(*create_mlp(self.features_dim, 1, vf_arch, self.activation_fn))
+            if self.ortho_init:
+                self.punishment_value_net.apply(partial(self.init_weights, gain=np.sqrt(2)))
+                self.punishment_value_net[-1].apply(partial(self.init_weights, gain=1))
+        self.register_buffer("running_interest", th.zeros(()))
+        self.optimizer = self.optimizer_class(self.parameters(), lr=lr_schedule(1), **self.optimizer_kwargs)
+
+    def _get_constructor_parameters(self) -> dict[str, Any]:
+        data = super()._get_constructor_parameters()
+        data.update(
+            temperature=self.temperature, min_temperature=self.min_temperature, max_temperature=self.max_temperature
+        )
+        return data
+
+    def evaluate_state(self, obs: PyTorchObs) -> tuple[th.Tensor, th.Tensor, th.Tensor]:
+        """Actor latent, ``V_R(s)`` and ``V_P(s)`` in one pass."""
+        features = self.extract_features(obs)
+        if self.share_features_extractor:
+            latent_pi, latent_vf = self.mlp_extractor(features)
+            vf_features = features
+        else:
+            pi_features, vf_features = features
+            latent_pi = self.mlp_extractor.forward_actor(pi_features)
+            latent_vf = self.mlp_extractor.forward_critic(vf_features)
+        return latent_pi, self.value_net(latent_vf), self.punishment_value_net(vf_features)
+
+    def evaluate_actions_two_dim(
+        self, obs: PyTorchObs, actions: th.Tensor
+    ) -> tuple[th.Tensor, th.Tensor, th.Tensor, th.Tensor | None]:
+        """``V_R``, ``V_P``, log-probability and entropy of ``actions`` under the raw preferences (eq. 10)."""
+        latent_pi, values, punishment_values = self.evaluate_state(obs)
+        distribution = self._get_action_dist_from_latent(latent_pi)
+        return values, punishment_values, distribution.log_prob(actions), distribution.entropy()
+
+    def predict_punishment_values(self, obs: PyTorchObs) -> th.Tensor:
+        """Punishment critic ``V_P(s)`` (eq. 4)."""
+        return self.punishment_value_net(BaseModel.extract_features(self, obs, self.vf_features_extractor))
+
+    def inverse_temperature(self, interest: th.Tensor) -> th.Tensor:
+        """``1 / T`` of eq. 9 for each interest value.
+
+        An interest of exactly 0 gives uniform random actions (``1/T = 0``), as the paper states;
+        a Gaussian has no uniform limit and takes ``max_temperature`` instead.
+        """
+        if self.temperature != "interest":
+            return th.full_like(interest, 1.0 / self.temperature)
+        inverse = 1.0 / interest.clamp(self.min_temperature, self.max_temperature)
+        if isinstance(self.action_dist, DiagGaussianDistribution):
+            return inverse
+        return th.where(interest > 0, inverse, th.zeros_like(inverse))
+
+    def tempered_distribution(self, latent_pi: th.Tensor, inverse_temperature: th.Tensor) -> Distribution:
+        """Action distribution of eq. 9: preferences times ``1 / T`` (a Gaussian's std times ``T``)."""
+        inverse_temperature = inverse_temperature.reshape(-1, 1)
+        mean_actions = self.action_net(latent_pi)
+        if isinstance(self.action_dist, DiagGaussianDistribution):
+            return self.action_dist.proba_distribution(mean_actions, self.log_std - th.log(inverse_temperature))
+        return self.action_dist.proba_distribution(action_logits=mean_actions * inverse_temperature)
+
+    def update_running_interest(self, mean_interest: float) -> None:
+        """Fold one rollout's mean interest into the estimate that ``predict`` uses."""
+        if self.running_interest.item() == 0.0:
+            self.running_interest.fill_(mean_interest)
+        else:
+            self.running_interest.lerp_(th.tensor(mean_interest, device=self.device), INTEREST_EMA_RATE)
+
+    def _actor_latent(self, obs: PyTorchObs) -> th.Tensor:
+        return self.mlp_extractor.forward_actor(BaseModel.extract_features(self, obs, self.pi_features_extractor))
+
+    def _running_distribution(self, latent_pi: th.Tensor) -> Distribution:
+        return self.tempered_distribution(
+            latent_pi, self.inverse_temperature(self.running_interest.expand(len(latent_pi)))
+        )
+
+    def get_distribution(self, obs: PyTorchObs) -> Distribution:
+        """Tempered action distribution (eq. 9) at the running interest estimate."""
+        return self._running_distribution(self._actor_latent(obs))
+
+    def _predict(self, observation: PyTorchObs, deterministic: bool = False) -> th.Tensor:
+        """Sample at the running interest, or take the argmax of the raw preferences if ``deterministic``."""
+        latent_pi = self._actor_latent(observation)
+        if deterministic:
+            return self._get_action_dist_from_latent(latent_pi).get_actions(deterministic=True)
+        return self._running_distribution(latent_pi).get_actions()
+
+
+class TwoDimActorCriticCnnPolicy(TwoDimActorCriticPolicy):
+    """``TwoDimActorCriticPolicy`` with SB3's ``NatureCNN`` features extractor for images."""
+
+    def __init__(self, *args: Any, features_extractor_class: type = NatureCNN, **kwargs: Any):
+        super().__init__(*args, features_extractor_class=features_extractor_class, **kwargs)
+
+
+class TwoDimMultiInputPolicy(TwoDimActorCriticPolicy):
+    """``TwoDimActorCriticPolicy`` with SB3's ``CombinedExtractor`` for ``Dict`` observations."""
+
+    def __init__(self, *args: Any, features_extractor_class: type = CombinedExtractor, **kwargs: Any):
+        super().__init__(*args, features_extractor_class=features_extractor_class, **kwargs)

@@ -1,0 +1,369 @@
+"""TwoDimA2C: the actor-critic of two-dimensional evaluation reinforcement learning (2D-RL)."""
+
+from typing import Any, ClassVar, NamedTuple, TypeVar
+
+import numpy as np
+import torch as th
+from gymnasium import spaces
+from stable_baselines3 import A2C
+from stable_baselines3.common.buffers import RolloutBuffer
+from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.policies import BasePolicy
+from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedule
+from stable_baselines3.common.utils import explained_variance, obs_as_tensor
+from stable_baselines3.common.vec_env import VecEnv
+from torch.nn import functional as F
+
+from sb3_twodrl.buffers import TwoDimBufferMixin, TwoDimDictRolloutBuffer, TwoDimRolloutBuffer
+from sb3_twodrl.policies import (
+    TwoDimActorCriticCnnPolicy,
+    TwoDimActorCriticPolicy,
+    TwoDimMultiInputPolicy,
+)
+from sb3_twodrl.splitting import RewardSplit, make_reward_split, split_rewards
+
+SelfTwoDimA2C = TypeVar("SelfTwoDimA2C", bound="TwoDimA2C")
+
+
+class _Transition(NamedTuple):
+    """The last vectorised step: observations before and after, and its (unbootstrapped) evaluations."""
+
+    obs: Any
+    next_obs: Any
+    reward: np.ndarray
+    punishment: np.ndarray
+
+
+def _check_unit_interval(name: str, value: float) -> None:
+    if not 0.0 <= value <= 1.0:
+        raise ValueError(f"{name} must be in [0, 1], got {value!r}")
+
+
+def _check_non_negative(name: str, value: float) -> None:
+    if not value >= 0.0:
+        raise ValueError(f"{name} must be >= 0, got {value!r}")
+
+
+class TwoDimA2C(A2C):
+    """
+    Two-dimensional evaluation actor-critic (2D-RL, Okada et al., section 2).
+
+    A reward critic ``V_R`` (discount ``gamma``) and a punishment critic ``V_P`` (discount
+    ``punishment_gamma``) learn the two evaluations (eq. 3-8). The actor follows the utility
+    ``A_R - punishment_weight * A_P`` (eq. 1, 10, with GAE per stream) and, in ``"interest"`` mode,
+    acts with the softmax temperature ``T = |delta_R| + |delta_P|`` of the transition that led each
+    env into its current state (eq. 2, 9), clamped to ``[min_temperature, max_temperature]``; an
+    interest of exactly 0 (an episode's first step) means uniform random actions.
+
+    Every argument of SB3's ``A2C`` keeps its meaning and default (``gamma`` discounts the reward
+    stream); see ``A2C`` for them.
+
+    :param punishment_gamma: discount of the punishment critic (eq. 4, 6, 8)
+    :param punishment_gae_lambda: GAE lambda of the punishment stream; None: ``gae_lambda``
+    :param punishment_vf_coef: loss weight of the punishment critic; None: ``vf_coef``
+    :param punishment_weight: ``w`` in the utility ``A_R - w * A_P`` (eq. 1 is ``w = 1``)
+    :param reward_split: how ``(reward, info)`` becomes ``(r_R, r_P)``: ``"auto"``, ``"info"``,
+        ``"cost"``, ``"sign"`` or a callable (see ``sb3_twodrl.splitting``)
+    :param temperature: ``"interest"`` (eq. 9 with ``T = delta+``) or a fixed positive temperature
+    :param min_temperature: floor of the interest temperature; keeps the policy from freezing
+        into argmax once the critics settle and the interest collapses toward 0
+    :param max_temperature: ceiling of the interest temperature
+    """
+
+    policy_aliases: ClassVar[dict[str, type[BasePolicy]]] = {
+        "MlpPolicy": TwoDimActorCriticPolicy,
+        "CnnPolicy": TwoDimActorCriticCnnPolicy,
+        "MultiInputPolicy": TwoDimMultiInputPolicy,
+    }
+    policy: TwoDimActorCriticPolicy
+    rollout_buffer: TwoDimRolloutBuffer
+
+    def __init__(
+        self,
+        policy: str | type[TwoDimActorCriticPolicy],
+        env: GymEnv | str,
+        learning_rate: float | Schedule = 7e-4,
+        n_steps: int = 5,
+        gamma: float = 0.99,
+        gae_lambda: float = 1.0,
+        ent_coef: float = 0.0,
+        vf_coef: float = 0.5,
+        max_grad_norm: float = 0.5,
+        rms_prop_eps: float = 1e-5,
+        use_rms_prop: bool = True,
+        use_sde: bool = False,
+        sde_sample_freq: int = -1,
+        rollout_buffer_class: type[RolloutBuffer] | None = None,
+        rollout_buffer_kwargs: dict[str, Any] | None = None,
+        normalize_advantage: bool = False,
+        stats_window_size: int = 100,
+        tensorboard_log: str | None = None,
+        policy_kwargs: dict[str, Any] | None = None,
+        verbose: int = 0,
+        seed: int | None = None,
+        device: th.device | str = "auto",
+        punishment_gamma: float = 0.1,
+        punishment_gae_lambda: float | None = None,
+        punishment_vf_coef: float | None = None,
+        punishment_weight: float = 1.0,
+        reward_split: str | RewardSplit = "auto",
+        temperature: str | float = "interest",
+        min_temperature: float = 0.1,
+        max_temperature: float = 10.0,
+        _init_setup_model: bool = True,
+    ):
+        self.punishment_gamma = punishment_gamma
+        self.punishment_gae_lambda = gae_lambda if punishment_gae_lambda is None else punishment_gae_lambda
+        self.punishment_vf_coef = vf_coef if punishment_vf_coef is None else punishment_vf_coef
+        self.punishment_weight = punishment_weight
+        self.reward_split = reward_split
+        self._reward_split = make_reward_split(reward_split)
+        for name in ("gamma", "gae_lambda"):
+            _check_unit_interval(name, locals()[name])
+        for name in ("punishment_gamma", "punishment_gae_lambda"):
+            _check_unit_interval(name, getattr(self, name))
+        for name in ("ent_coef", "vf_coef"):
+            _check_non_negative(name, locals()[name])
+        for name in ("punishment_vf_coef", "punishment_weight"):
+            _check_non_negative(name, getattr(self, name))
+        policy_kwargs = dict(policy_kwargs or {})
+        policy_kwargs.update(temperature=temperature, min_temperature=min_temperature, max_temperature=max_temperature)
+        self._last_transition: _Transition | None = None
+        super().__init__(
+            policy,
+            env,
+            learning_rate=learning_rate,
+            n_steps=n_steps,
+            gamma=gamma,
+            gae_lambda=gae_lambda,
+            ent_coef=ent_coef,
+            vf_coef=vf_coef,
+            max_grad_norm=max_grad_norm,
+            rms_prop_eps=rms_prop_eps,
+            use_rms_prop=use_rms_prop,
+            use_sde=use_sde,
+            sde_sample_freq=sde_sample_freq,
+            rollout_buffer_class=rollout_buffer_class,
+            rollout_buffer_kwargs=rollout_buffer_kwargs,
+            normalize_advantage=normalize_advantage,
+            stats_window_size=stats_window_size,
+            tensorboard_log=tensorboard_log,
+            policy_kwargs=policy_kwargs,
+            verbose=verbose,
+            seed=seed,
+            device=device,
+            _init_setup_model=_init_setup_model,
+        )
+
+    def _setup_model(self) -> None:
+        if self.rollout_buffer_class is None:
+            is_dict = isinstance(self.observation_space, spaces.Dict)
+            self.rollout_buffer_class = TwoDimDictRolloutBuffer if is_dict else TwoDimRolloutBuffer
+        if not issubclass(self.rollout_buffer_class, TwoDimBufferMixin):
+            raise ValueError(f"rollout_buffer_class must subclass TwoDimBufferMixin, got {self.rollout_buffer_class!r}")
+        self.rollout_buffer_kwargs.update(
+            punishment_gamma=self.punishment_gamma,
+            punishment_gae_lambda=self.punishment_gae_lambda,
+            punishment_weight=self.punishment_weight,
+        )
+        super()._setup_model()
+
+    def _excluded_save_params(self) -> list[str]:
+        return [*super()._excluded_save_params(), "_last_transition", "_reward_split"]
+
+    def _values_before_last_transition(self) -> tuple[th.Tensor, th.Tensor] | None:
+        """Current critics' ``V_R``, ``V_P`` of the state each env left by its last transition.
+
+        None when there is no transition into the current observation (first rollout, or the
+        envs were reset or replaced since).
+        """
+        transition = self._last_transition
+        if transition is None or transition.next_obs is not self._last_obs:
+            return None
+        _, values, punishment_values = self.policy.evaluate_state(obs_as_tensor(transition.obs, self.device))
+        return values, punishment_values
+
+    def _interest(
+        self, previous: tuple[th.Tensor, th.Tensor] | None, values: th.Tensor, punishment_values: th.Tensor
+    ) -> th.Tensor:
+        """Interest ``|delta_R| + |delta_P|`` (eq. 2, 7, 8) of the transition into each env's current state.
+
+        An env whose current state starts an episode (or that has no known transition) has interest 0.
+        """
+        if previous is None:
+            return th.zeros(len(values), device=self.device)
+        assert self._last_transition is not None
+        reward = th.as_tensor(self._last_transition.reward, device=self.device)
+        punishment = th.as_tensor(self._last_transition.punishment, device=self.device)
+        delta_r = reward + self.gamma * values.flatten() - previous[0].flatten()
+        delta_p = punishment + self.punishment_gamma * punishment_values.flatten() - previous[1].flatten()
+        starts = th.as_tensor(self._last_episode_starts, device=self.device, dtype=th.bool)
+        return th.where(starts, 0.0, delta_r.abs() + delta_p.abs())
+
+    def collect_rollouts(
+        self,
+        env: VecEnv,
+        callback: BaseCallback,
+        rollout_buffer: RolloutBuffer,
+        n_rollout_steps: int,
+    ) -> bool:
+        """SB3's rollout loop with both evaluation streams and the interest temperature of eq. 9."""
+        assert self._last_obs is not None, "No previous observation was provided"
+        self.policy.set_training_mode(False)
+        n_steps = 0
+        rollout_buffer.reset()
+        callback.on_rollout_start()
+        use_interest = self.policy.temperature == "interest"
+        with th.no_grad():
+            previous = self._values_before_last_transition() if use_interest else None
+
+        while n_steps < n_rollout_steps:
+            with th.no_grad():
+                obs_tensor = obs_as_tensor(self._last_obs, self.device)  # type: ignore[arg-type]
+                latent_pi, values, punishment_values = self.policy.evaluate_state(obs_tensor)
+                interest = self._interest(previous, values, punishment_values)
+                inverse_temperature = self.policy.inverse_temperature(interest)
+                distribution = self.policy.tempered_distribution(latent_pi, inverse_temperature)
+                actions = distribution.get_actions()
+                log_probs = distribution.log_prob(actions)
+            actions = actions.cpu().numpy().reshape((-1, *self.action_space.shape))  # type: ignore[misc]
+
+            clipped_actions = actions
+            if isinstance(self.action_space, spaces.Box):
+                if self.policy.squash_output:
+                    clipped_actions = self.policy.unscale_action(clipped_actions)
+                else:
+                    clipped_actions = np.clip(actions, self.action_space.low, self.action_space.high)
+
+            new_obs, rewards, dones, infos = env.step(clipped_actions)
+            self.num_timesteps += env.num_envs
+
+            callback.update_locals(locals())
+            if not callback.on_step():
+                return False
+
+            self._update_info_buffer(infos, dones)
+            n_steps += 1
+
+            if isinstance(self.action_space, spaces.Discrete):
+                actions = actions.reshape(-1, 1)
+
+            rewards, punishments = split_rewards(self._reward_split, rewards, infos, self.num_timesteps)
+            self._last_transition = _Transition(self._last_obs, new_obs, rewards.copy(), punishments.copy())
+            previous = (values, punishment_values) if use_interest else None
+            # Bootstrap both critics on time-limit truncation, as SB3 does (GitHub issue #633)
+            for idx, done in enumerate(dones):
+                if (
+                    done
+                    and infos[idx].get("terminal_observation") is not None
+                    and infos[idx].get("TimeLimit.truncated", False)
+                ):
+                    terminal_obs = self.policy.obs_to_tensor(infos[idx]["terminal_observation"])[0]
+                    with th.no_grad():
+                        _, terminal_value, terminal_punishment_value = self.policy.evaluate_state(terminal_obs)
+                    rewards[idx] += self.gamma * terminal_value[0]
+                    punishments[idx] += self.punishment_gamma * terminal_punishment_value[0]
+
+            rollout_buffer.add(
+                self._last_obs,  # type: ignore[arg-type]
+                actions,
+                rewards,
+                self._last_episode_starts,  # type: ignore[arg-type]
+                values,
+                log_probs,
+                punishment=punishments,
+                punishment_value=punishment_values,
+                inverse_temperature=inverse_temperature,
+            )
+            self._last_obs = new_obs  # type: ignore[assignment]
+            self._last_episode_starts = dones
+
+        with th.no_grad():
+            _, values, punishment_values = self.policy.evaluate_state(obs_as_tensor(new_obs, self.device))  # type: ignore[arg-type]
+        rollout_buffer.compute_returns_and_advantage(
+            last_values=values, dones=dones, last_punishment_values=punishment_values
+        )
+        self.policy.update_running_interest(float(rollout_buffer.interests.mean()))
+
+        callback.update_locals(locals())
+        callback.on_rollout_end()
+        return True
+
+    def train(self) -> None:
+        """One gradient step: actor on the utility (eq. 1, 10), each critic on its own TD(lambda) target."""
+        self.policy.set_training_mode(True)
+        self._update_learning_rate(self.policy.optimizer)
+
+        for rollout_data in self.rollout_buffer.get(batch_size=None):
+            actions = rollout_data.actions
+            if isinstance(self.action_space, spaces.Discrete):
+                actions = actions.long().flatten()
+
+            values, punishment_values, log_prob, entropy = self.policy.evaluate_actions_two_dim(
+                rollout_data.observations, actions
+            )
+            advantages = rollout_data.advantages
+            if self.normalize_advantage:
+                advantages = (advantages - advantages.mean()) / (advantages.std() + 1e-8)
+
+            policy_loss = -(advantages * log_prob).mean()
+            value_loss = F.mse_loss(rollout_data.returns, values.flatten())
+            punishment_value_loss = F.mse_loss(rollout_data.punishment_returns, punishment_values.flatten())
+            entropy_loss = -th.mean(-log_prob) if entropy is None else -th.mean(entropy)
+
+            loss = (
+                policy_loss
+                + self.ent_coef * entropy_loss
+                + self.vf_coef * value_loss
+                + self.punishment_vf_coef * punishment_value_loss
+            )
+            self.policy.optimizer.zero_grad()
+            loss.backward()
+            th.nn.utils.clip_grad_norm_(self.policy.parameters(), self.max_grad_norm)
+            self.policy.optimizer.step()
+
+        self._n_updates += 1
+        self._log_train(policy_loss, value_loss, punishment_value_loss, entropy_loss)
+
+    def _log_train(
+        self, policy_loss: th.Tensor, value_loss: th.Tensor, punishment_value_loss: th.Tensor, entropy_loss: th.Tensor
+    ) -> None:
+        buffer = self.rollout_buffer
+        self.logger.record("train/n_updates", self._n_updates, exclude="tensorboard")
+        self.logger.record(
+            "train/explained_variance", explained_variance(buffer.values.flatten(), buffer.returns.flatten())
+        )
+        self.logger.record(
+            "train/punishment_explained_variance",
+            explained_variance(buffer.punishment_values.flatten(), buffer.punishment_returns.flatten()),
+        )
+        self.logger.record("train/entropy_loss", entropy_loss.item())
+        self.logger.record("train/policy_loss", policy_loss.item())
+        self.logger.record("train/value_loss", value_loss.item())
+        self.logger.record("train/punishment_value_loss", punishment_value_loss.item())
+        self.logger.record("train/interest", float(buffer.interests.mean()))
+        self.logger.record("train/utility", float(buffer.utilities.mean()))
+        tempered = buffer.inverse_temperatures > 0
+        if tempered.any():
+            self.logger.record("train/temperature", float(np.mean(1.0 / buffer.inverse_temperatures[tempered])))
+        self.logger.record("rollout/punishment_mean", float(buffer.punishments.mean()))
+        if hasattr(self.policy, "log_std"):
+            self.logger.record("train/std", th.exp(self.policy.log_std).mean().item())
+
+    def learn(
+        self: SelfTwoDimA2C,
+        total_timesteps: int,
+        callback: MaybeCallback = None,
+        log_interval: int = 100,
+        tb_log_name: str = "TwoDimA2C",
+        reset_num_timesteps: bool = True,
+        progress_bar: bool = False,
+    ) -> SelfTwoDimA2C:
+        return super().learn(
+            total_timesteps=total_timesteps,
+            callback=callback,
+            log_interval=log_interval,
+            tb_log_name=tb_log_name,
+            reset_num_timesteps=reset_num_timesteps,
+            progress_bar=progress_bar,
+        )
