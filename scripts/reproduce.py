@@ -71,7 +71,7 @@ COLUMNS = [
 PRESETS: dict[str, dict[str, int]] = {
     # epochs, learning episodes per epoch (K), test episodes per epoch (M), seeds (S)
     "tiny": {"epochs": 3, "learn_episodes": 8, "test_episodes": 4, "seeds": 2},
-    "quick": {"epochs": 30, "learn_episodes": 200, "test_episodes": 50, "seeds": 3},
+    "quick": {"epochs": 20, "learn_episodes": 150, "test_episodes": 50, "seeds": 3},
     "paper": {"epochs": 1000, "learn_episodes": 1000, "test_episodes": 100, "seeds": 5},
 }
 ALGO_LABELS = {"twoda2c": "2D-RL (TwoDimA2C)", "a2c": "actor-critic (A2C)"}
