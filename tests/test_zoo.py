@@ -103,6 +103,11 @@ def test_train_tiny_budget_leaves_model_and_tensorboard(algo, tmp_path, monkeypa
         ["--algo", algo, "--env", "ToyNav-v0", "--gym-packages", "tests.toy_nav", "-n", "20", "--no-render"],
         monkeypatch,
     )
+    if algo == "a2c":  # and records a video (rl-zoo3's record_video)
+        pytest.importorskip("moviepy")
+        record = ["--algo", algo, "--env", "ToyNav-v0", "--gym-packages", "tests.toy_nav"]
+        run_script("enjoy.py", [*record, "--record", "-o", "videos", "-n", "10"], monkeypatch)
+        assert list((tmp_path / "videos").glob("*.mp4"))
 
 
 @pytest.mark.parametrize("env_id", ["CartPole-v1", "Acrobot-v1", "NomadOffice-v0"])

@@ -35,9 +35,15 @@ def expected_episode(spec: tuple[int, str | None, str]) -> tuple[float, int]:
 
 
 class ToyNavEnv(gym.Env):
-    metadata = {"render_modes": []}
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
 
-    def __init__(self, script: list[tuple[int, str | None, str]] | None = None, random_outcomes: bool = False):
+    def __init__(
+        self,
+        script: list[tuple[int, str | None, str]] | None = None,
+        random_outcomes: bool = False,
+        render_mode: str | None = None,
+    ):
+        self.render_mode = render_mode
         self.script = script or SCRIPT
         self.random_outcomes = random_outcomes
         self.observation_space = spaces.Box(0.0, 1.0, shape=(3,), dtype=np.float32)
@@ -61,6 +67,11 @@ class ToyNavEnv(gym.Env):
             self._spec = self.script[self._episode % len(self.script)]
         self._t = 0
         return self._obs(), {"position_cm": (0.0, 0.0), "route": None}
+
+    def render(self):
+        frame = np.zeros((32, 32, 3), dtype=np.uint8)
+        frame[:, : int(32 * self._t / self._spec[0])] = 255
+        return frame
 
     def step(self, action):
         length, route, outcome = self._spec
