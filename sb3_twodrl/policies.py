@@ -11,7 +11,6 @@ from typing import Any
 
 import numpy as np
 import torch as th
-from gymnasium import spaces
 from stable_baselines3.common.distributions import DiagGaussianDistribution, Distribution
 from stable_baselines3.common.policies import ActorCriticPolicy, BaseModel
 from stable_baselines3.common.torch_layers import CombinedExtractor, NatureCNN, create_mlp
@@ -20,8 +19,6 @@ from torch import nn
 
 INTEREST_EMA_RATE = 0.1
 """Weight of the newest rollout's mean interest in the running estimate used by ``predict``."""
-
-SUPPORTED_ACTION_SPACES = (spaces.Discrete, spaces.MultiDiscrete, spaces.MultiBinary, spaces.Box)
 
 
 def check_temperature(temperature: str | float, min_temperature: float, max_temperature: float) -> None:
@@ -72,8 +69,6 @@ class TwoDimActorCriticPolicy(ActorCriticPolicy):
         self.min_temperature = min_temperature
         self.max_temperature = max_temperature
         super().__init__(*args, **kwargs)
-        if not isinstance(self.action_space, SUPPORTED_ACTION_SPACES):
-            raise ValueError(f"action space {self.action_space} is not supported; use one of {SUPPORTED_ACTION_SPACES}")
         if self.use_sde:
             raise ValueError("use_sde=True is not supported: the temperature scales the Gaussian's own std")
 

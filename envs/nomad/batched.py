@@ -1,0 +1,207 @@
+"""N Nomad robots stepped in one numpy call, with the semantics of N ``NomadOffice-v0`` envs.
+
+:class:`BatchedNomadOffice` is a ``gymnasium.vector.VectorEnv`` (same-step autoreset) on the
+ideal lattice model, optionally with per-step sensor noise; sub-env ``i`` reset with seed ``s``
+behaves exactly like ``gym.make("envs:NomadOffice-v0")`` reset with seed ``s`` and reset again
+after every episode (same observations, rewards, terminations and truncations).
+:class:`SB3VecEnvAdapter` exposes it to Stable-Baselines3 as a ``VecEnv``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvStepReturn
+
+from envs import MAX_EPISODE_STEPS
+from envs.nomad import sensors
+from envs.nomad.office import (
+    COLLISION_PUNISHMENT,
+    GOAL_REWARD,
+    MOVE_PUNISHMENT,
+    ROUTES,
+    NomadOfficeEnv,
+    episode_keys,
+)
+from envs.nomad.sensors import NoiseModel
+
+_ROUTE_NAMES = np.array(ROUTES, dtype=object)
+_INFO_KEYS = ("punishment", "collision", "route", "position_cm", "is_success")
+
+
+class BatchedNomadOffice(VectorEnv):
+    """``num_envs`` robots in one office; arrays in, arrays out.
+
+    ``info`` holds arrays ``punishment``, ``collision``, ``route`` (object: ``None``/``"shortcut"``/
+    ``"detour"``), ``position_cm`` ``(N, 2)`` and ``is_success``, each with its ``_key`` mask;
+    where an episode ended, ``final_obs`` ``(N, obs_dim)`` (rows valid where ``_final_obs``) holds
+    its last observation and the returned observation is the next episode's first.
+    """
+
+    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
+
+    def __init__(
+        self,
+        num_envs: int,
+        map: str | Path | None = None,
+        *,
+        observe_odometry: bool = True,
+        sensor_noise: bool | NoiseModel | None = None,
+        max_episode_steps: int = MAX_EPISODE_STEPS,
+    ) -> None:
+        if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
+            raise ValueError(f"num_envs must be a positive int, got {num_envs!r}")
+        if isinstance(max_episode_steps, bool) or not isinstance(max_episode_steps, int) or max_episode_steps < 1:
+            raise ValueError(f"max_episode_steps must be a positive int, got {max_episode_steps!r}")
+        template = NomadOfficeEnv(map, observe_odometry=observe_odometry, sensor_noise=sensor_noise)
+        self.core, self.noise = template.core, template.noise
+        self.num_envs = int(num_envs)
+        self.max_episode_steps = max_episode_steps
+        self.single_observation_space = template.observation_space
+        self.single_action_space = template.action_space
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        odometry = self.core.odometry(self.core.lattice.cells)
+        table = np.concatenate([self.core.readings, odometry], axis=1)
+        self._obs_table = np.ascontiguousarray(table[:, : self.single_observation_space.shape[0]])
+        self._sd_table = None if self.noise is None else self.noise.sd(self.core.ranges)
+        self._step_reward = np.array([-MOVE_PUNISHMENT, GOAL_REWARD - MOVE_PUNISHMENT, -COLLISION_PUNISHMENT])
+        self._all = np.ones(self.num_envs, dtype=bool)
+        self._all.flags.writeable = False
+        self._cell = np.full(self.num_envs, self.core.start_cell)
+        self._route = np.zeros(self.num_envs, dtype=np.int8)
+        self._t = np.zeros(self.num_envs, dtype=np.int64)
+        self._episode = np.zeros(self.num_envs, dtype=np.int64)
+        self._base = np.zeros(self.num_envs, dtype=np.uint64)
+        self._key = np.zeros(self.num_envs, dtype=np.uint64)
+
+    def reset(
+        self, *, seed: int | Sequence[int | None] | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Reset every robot to the start; ``seed=s`` seeds sub-env ``i`` with ``s + i``."""
+        if options:
+            raise ValueError(f"BatchedNomadOffice.reset takes no options, got {options!r}")
+        if seed is None or isinstance(seed, int | np.integer):
+            seeds = [None if seed is None else int(seed) + i for i in range(self.num_envs)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != self.num_envs:
+                raise ValueError(f"seed must be an int or {self.num_envs} seeds, got {len(seeds)}")
+        self._np_random, self._np_random_seed = seeding.np_random(seeds[0])
+        for i, s in enumerate(seeds):
+            rng = self._np_random if i == 0 else seeding.np_random(s)[0]
+            self._base[i] = rng.integers(0, 2**63, size=1, dtype=np.uint64)[0]
+        self._episode[:] = 0
+        self._key = episode_keys(self._base, self._episode)
+        self._cell[:] = self.core.start_cell
+        self._route[:] = 0
+        self._t[:] = 0
+        obs = self._observe(self._all)
+        zeros = np.zeros(self.num_envs, dtype=bool)
+        return obs, self._info(np.zeros(self.num_envs), zeros, zeros)
+
+    def _observe(self, rows: np.ndarray) -> np.ndarray:
+        cells = self._cell[rows]
+        obs = self._obs_table[cells]
+        if self.noise is not None:
+            ranges = self.noise.apply(self.core.ranges[cells], self._key[rows], self._t[rows], self._sd_table[cells])
+            obs[:, : sensors.N_READINGS] = sensors.normalise(ranges)
+        return obs
+
+    def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        """Move every robot (eq. 11-12 evaluations); finished robots restart in the same call."""
+        actions = np.asarray(actions)
+        if actions.shape != (self.num_envs,) or not np.all((actions >= 0) & (actions < 4)):
+            raise ValueError(f"actions must be {self.num_envs} integers in 0..3, got {actions!r}")
+        nxt = self.core.lattice.moves[self._cell, actions.astype(np.intp)]
+        collided = nxt < 0
+        self._cell = np.where(collided, self._cell, nxt)
+        code = self.core.route_code[self._cell]
+        self._route = np.where(~collided & (code > 0), code, self._route)
+        goal = self.core.goal[self._cell] & ~collided
+        self._t += 1
+        rewards = self._step_reward[np.where(collided, 2, goal.astype(np.intp))]
+        terminated = collided | goal
+        truncated = (self._t >= self.max_episode_steps) & ~terminated
+        obs = self._observe(self._all)
+        info = self._info(np.where(collided, COLLISION_PUNISHMENT, MOVE_PUNISHMENT), collided, goal)
+        done = terminated | truncated
+        if done.any():
+            info["final_obs"], info["_final_obs"] = obs.copy(), done
+            self._episode[done] += 1
+            self._key[done] = episode_keys(self._base[done], self._episode[done])
+            self._cell[done] = self.core.start_cell
+            self._route[done] = 0
+            self._t[done] = 0
+            obs[done] = self._observe(done)
+        return obs, rewards, terminated, truncated, info
+
+    def _info(self, punishment: np.ndarray, collided: np.ndarray, goal: np.ndarray) -> dict[str, Any]:
+        values = (punishment, collided, _ROUTE_NAMES[self._route], self.core.lattice.cells[self._cell], goal)
+        info: dict[str, Any] = dict(zip(_INFO_KEYS, values, strict=True))
+        info.update({f"_{key}": self._all for key in _INFO_KEYS})
+        return info
+
+
+class SB3VecEnvAdapter(VecEnv):
+    """Stable-Baselines3 ``VecEnv`` view of a :class:`BatchedNomadOffice` (per-env info dicts)."""
+
+    def __init__(self, batched: BatchedNomadOffice) -> None:
+        self.batched = batched
+        super().__init__(batched.num_envs, batched.single_observation_space, batched.single_action_space)
+        self._actions = np.zeros(batched.num_envs, dtype=np.int64)
+
+    def reset(self) -> np.ndarray:
+        seed = None if self._seeds[0] is None else self._seeds
+        obs, _ = self.batched.reset(seed=seed)
+        self._reset_seeds()
+        return obs
+
+    def step_async(self, actions: np.ndarray) -> None:
+        self._actions = np.asarray(actions).reshape(self.num_envs)
+
+    def step_wait(self) -> VecEnvStepReturn:
+        obs, rewards, terminated, truncated, info = self.batched.step(self._actions)
+        done = terminated | truncated
+        infos: list[dict[str, Any]] = [
+            {
+                "punishment": float(p),
+                "collision": bool(c),
+                "route": r,
+                "position_cm": (float(xy[0]), float(xy[1])),
+                "is_success": bool(g),
+            }
+            for p, c, r, xy, g in zip(*(info[key] for key in _INFO_KEYS), strict=True)
+        ]
+        for i in np.flatnonzero(done):
+            infos[i]["terminal_observation"] = info["final_obs"][i]
+            infos[i]["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
+        return obs, rewards.astype(np.float32), done, infos
+
+    def close(self) -> None:
+        self.batched.close()
+
+    def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
+        return [getattr(self.batched, attr_name)] * len(self._get_indices(indices))
+
+    def set_attr(self, attr_name: str, value: Any, indices: Any = None) -> None:
+        setattr(self.batched, attr_name, value)
+
+    def env_method(self, method_name: str, *method_args: Any, indices: Any = None, **method_kwargs: Any) -> list[Any]:
+        raise NotImplementedError("BatchedNomadOffice has no per-env methods")
+
+    def env_is_wrapped(self, wrapper_class: type, indices: Any = None) -> list[bool]:
+        return [False] * len(self._get_indices(indices))
+
+
+def make_sb3_vec_env(n_envs: int, seed: int | None = None, **kwargs: Any) -> SB3VecEnvAdapter:
+    """An SB3 ``VecEnv`` of ``n_envs`` batched ``NomadOffice-v0`` robots (kwargs go to the batch)."""
+    venv = SB3VecEnvAdapter(BatchedNomadOffice(n_envs, **kwargs))
+    venv.seed(seed)
+    return venv

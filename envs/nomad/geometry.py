@@ -1,0 +1,260 @@
+"""Office geometry: map files, swept-disc collision and exact cone ranging (paper section 3.2).
+
+All lengths are centimetres, x grows east and y grows north. Walls are line segments; an
+obstacle polygon is stored as its edges. Every function is vectorised with numpy.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+ROBOT_RADIUS_CM = 30.0
+STEP_CM = 10.0
+
+
+@dataclass(frozen=True)
+class OfficeMap:
+    """A validated office: wall segments ``(n, 4)`` as ``x0, y0, x1, y1`` and named rectangles.
+
+    ``regions`` maps ``goal``, ``shortcut`` and ``detour`` to ``(xmin, ymin, xmax, ymax)``: the
+    goal is reached, and a route is committed to, when the robot's centre enters the rectangle.
+    """
+
+    name: str
+    bounds: tuple[float, float, float, float]
+    walls: np.ndarray
+    start: tuple[float, float]
+    regions: dict[str, tuple[float, float, float, float]]
+    source: str
+
+    def inside_bounds(self, xy: np.ndarray) -> np.ndarray:
+        """True where a point ``(..., 2)`` lies inside the map's bounding box."""
+        x0, y0, x1, y1 = self.bounds
+        return (xy[..., 0] >= x0) & (xy[..., 0] <= x1) & (xy[..., 1] >= y0) & (xy[..., 1] <= y1)
+
+    def in_region(self, name: str, xy: np.ndarray) -> np.ndarray:
+        """True where a point ``(..., 2)`` lies in the named rectangle."""
+        x0, y0, x1, y1 = self.regions[name]
+        return (xy[..., 0] >= x0) & (xy[..., 0] <= x1) & (xy[..., 1] >= y0) & (xy[..., 1] <= y1)
+
+
+def default_map_path() -> Path:
+    """The office shipped with the package."""
+    return Path(__file__).with_name("maps") / "office.json"
+
+
+def _number_list(value: object, length: int, what: str, source: str) -> tuple[float, ...]:
+    if not isinstance(value, list) or len(value) != length or not all(isinstance(v, int | float) for v in value):
+        raise ValueError(f"map file {source}: {what} must be a list of {length} numbers, got {value!r}")
+    out = tuple(float(v) for v in value)
+    if not all(np.isfinite(out)):
+        raise ValueError(f"map file {source}: {what} must be finite, got {value!r}")
+    return out
+
+
+def load_map(path: str | Path | None = None) -> OfficeMap:
+    """Read and validate a map file (format documented in ``docs/nomad.md``); ``None`` loads the office.
+
+    Raises ``ValueError`` naming the file and the offending entry.
+    """
+    if path is not None and not isinstance(path, str | Path):
+        raise TypeError(f"map must be a path (str or pathlib.Path) or None, got {type(path).__name__}: {path!r}")
+    source = str((default_map_path() if path is None else Path(path)).resolve())
+    try:
+        data = json.loads(Path(source).read_text())
+    except FileNotFoundError as err:
+        raise ValueError(f"map file {source} does not exist") from err
+    except json.JSONDecodeError as err:
+        raise ValueError(f"map file {source} is not valid JSON: {err}") from err
+    if not isinstance(data, dict):
+        raise ValueError(f"map file {source}: top level must be an object, got {type(data).__name__}")
+    missing = [key for key in ("bounds", "walls", "start", "regions") if key not in data]
+    if missing:
+        raise ValueError(f"map file {source}: missing keys {missing}")
+    if data.get("units", "cm") != "cm":
+        raise ValueError(f"map file {source}: units must be 'cm', got {data['units']!r}")
+    bounds = _number_list(data["bounds"], 4, "bounds", source)
+    if not (bounds[0] < bounds[2] and bounds[1] < bounds[3]):
+        raise ValueError(f"map file {source}: bounds must be [xmin, ymin, xmax, ymax] with min < max, got {bounds}")
+    segments: list[tuple[float, ...]] = []
+    if not isinstance(data["walls"], list) or not data["walls"]:
+        raise ValueError(f"map file {source}: walls must be a non-empty list of segments, got {data['walls']!r}")
+    for i, wall in enumerate(data["walls"]):
+        segments.append(_number_list(wall, 4, f"walls[{i}]", source))
+    for i, poly in enumerate(data.get("obstacles", [])):
+        if not isinstance(poly, list) or len(poly) < 3:
+            raise ValueError(f"map file {source}: obstacles[{i}] must list at least 3 vertices, got {poly!r}")
+        verts = [_number_list(v, 2, f"obstacles[{i}] vertex", source) for v in poly]
+        segments += [(*verts[k], *verts[(k + 1) % len(verts)]) for k in range(len(verts))]
+    walls = np.array(segments, dtype=np.float64)
+    if np.any(np.hypot(walls[:, 2] - walls[:, 0], walls[:, 3] - walls[:, 1]) == 0.0):
+        raise ValueError(f"map file {source}: a wall segment has zero length")
+    start = _number_list(data["start"], 2, "start", source)
+    if not isinstance(data["regions"], dict):
+        raise ValueError(f"map file {source}: regions must be an object, got {data['regions']!r}")
+    regions: dict[str, tuple[float, float, float, float]] = {}
+    for name in ("goal", "shortcut", "detour"):
+        if name not in data["regions"]:
+            raise ValueError(f"map file {source}: regions.{name} is missing")
+        rect = _number_list(data["regions"][name], 4, f"regions.{name}", source)
+        if not (rect[0] <= rect[2] and rect[1] <= rect[3]):
+            raise ValueError(f"map file {source}: regions.{name} must be [xmin, ymin, xmax, ymax], got {rect}")
+        regions[name] = rect  # type: ignore[assignment]
+    office = OfficeMap(str(data.get("name", Path(source).stem)), bounds, walls, start, regions, source)  # type: ignore[arg-type]
+    start_xy = np.array(start)
+    if not office.inside_bounds(start_xy) or clearance(start_xy[None], walls)[0] <= ROBOT_RADIUS_CM:
+        raise ValueError(f"map file {source}: start {start} is outside the map or the robot there touches a wall")
+    return office
+
+
+def point_segment_distance(points: np.ndarray, walls: np.ndarray) -> np.ndarray:
+    """Distances ``(..., m)`` from points ``(..., 2)`` to wall segments ``(m, 4)``."""
+    a, d = walls[:, :2], walls[:, 2:] - walls[:, :2]
+    rel = points[..., None, :] - a
+    t = np.clip(np.einsum("...mk,mk->...m", rel, d) / np.einsum("mk,mk->m", d, d), 0.0, 1.0)
+    return np.linalg.norm(rel - t[..., None] * d, axis=-1)
+
+
+def clearance(points: np.ndarray, walls: np.ndarray) -> np.ndarray:
+    """Distance ``(...)`` from each point ``(..., 2)`` to the nearest wall."""
+    return point_segment_distance(points, walls).min(axis=-1)
+
+
+def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+
+
+def swept_clearance(p0: np.ndarray, p1: np.ndarray, walls: np.ndarray) -> np.ndarray:
+    """Distance ``(n,)`` between each move segment ``p0 -> p1`` (``(n, 2)`` each) and the nearest wall.
+
+    The swept disc of radius R touches a wall exactly when this is ``<= R``.
+    """
+    a, b = walls[:, :2], walls[:, 2:]
+    seg = p1 - p0
+    wall = b - a
+    # proper or touching intersection of the two segments means distance 0
+    d1 = _cross(seg[:, None, :], a - p0[:, None, :])
+    d2 = _cross(seg[:, None, :], b - p0[:, None, :])
+    d3 = _cross(wall, p0[:, None, :] - a)
+    d4 = _cross(wall, p1[:, None, :] - a)
+    crossing = (d1 * d2 <= 0) & (d3 * d4 <= 0) & ~((d1 == 0) & (d2 == 0))
+    ends = np.minimum(point_segment_distance(p0, walls), point_segment_distance(p1, walls))
+    moving = np.hypot(seg[:, 0], seg[:, 1]) > 0
+    tips = np.full(ends.shape, np.inf)
+    if moving.any():
+        move_segs = np.concatenate([p0[moving], p1[moving]], axis=1)
+        # distance from each wall end point to each move segment
+        tips[moving] = np.minimum(point_segment_distance(a, move_segs).T, point_segment_distance(b, move_segs).T)
+    dist = np.minimum(ends, tips)
+    return np.where(crossing & moving[:, None], 0.0, dist).min(axis=1)
+
+
+def _ray_hits(origins: np.ndarray, angles: np.ndarray, walls: np.ndarray) -> np.ndarray:
+    """Range ``(..., m)`` along rays (bearing ``angles``, broadcast with origins ``(..., 2)``) to each wall."""
+    direction = np.stack([np.sin(angles), np.cos(angles)], axis=-1)[..., None, :]
+    a, e = walls[:, :2], walls[:, 2:] - walls[:, :2]
+    rel = a - origins[..., None, :]
+    denom = _cross(direction, e)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = _cross(rel, e) / denom
+        s = _cross(rel, direction) / denom
+    hit = (denom != 0) & (t >= 0) & (s >= 0) & (s <= 1)
+    return np.where(hit, t, np.inf)
+
+
+def cone_ranges(origins: np.ndarray, bearings: np.ndarray, half_angle: float, walls: np.ndarray) -> np.ndarray:
+    """Exact distance from each origin to the nearest wall point inside a cone.
+
+    ``origins`` ``(..., s, 2)`` are sensor positions, ``bearings`` ``(s,)`` the cone axes in radians
+    clockwise from north, ``half_angle`` the cone's half width (0 gives a single ray). The nearest
+    point of a segment clipped to a convex cone is a clipped end or the segment's closest point, so
+    the minimum over those candidates is exact. Returns ``(..., s)``; ``inf`` where nothing is seen.
+    """
+    if half_angle == 0.0:
+        return _ray_hits(origins, bearings, walls).min(axis=-1)
+    best = np.minimum(
+        _ray_hits(origins, bearings - half_angle, walls), _ray_hits(origins, bearings + half_angle, walls)
+    ).min(axis=-1)
+    axis = np.stack([np.sin(bearings), np.cos(bearings)], axis=-1)[..., None, :]
+    cos_half = np.cos(half_angle)
+    a, d = walls[:, :2], walls[:, 2:] - walls[:, :2]
+    rel = origins[..., None, :] - a
+    t = np.clip(np.einsum("...mk,mk->...m", rel, d) / np.einsum("mk,mk->m", d, d), 0.0, 1.0)
+    for point in (a + t[..., None] * d, np.broadcast_to(a, rel.shape), np.broadcast_to(walls[:, 2:], rel.shape)):
+        vec = point - origins[..., None, :]
+        dist = np.linalg.norm(vec, axis=-1)
+        inside = np.einsum("...k,...k->...", vec, axis) >= cos_half * dist - 1e-9
+        best = np.minimum(best, np.where(inside, dist, np.inf).min(axis=-1))
+    return best
+
+
+@dataclass(frozen=True)
+class Lattice:
+    """The free cells of the 10 cm lattice through the start, and the move table between them.
+
+    ``cells`` ``(n, 2)`` are centre positions whose disc clears every wall; ``moves`` ``(n, 4)`` gives,
+    for actions N, E, S, W, the next cell index or -1 when the swept disc would touch a wall (or leave
+    the map); ``reachable`` marks cells reachable from the start without collision.
+    """
+
+    cells: np.ndarray
+    moves: np.ndarray
+    reachable: np.ndarray
+    origin: tuple[float, float]
+    shape: tuple[int, int]
+    grid: np.ndarray
+
+    def index(self, xy: np.ndarray | tuple[float, float]) -> int:
+        """Cell index of a position on the lattice, or -1 when it is off the lattice or not free."""
+        gx = (xy[0] - self.origin[0]) / STEP_CM
+        gy = (xy[1] - self.origin[1]) / STEP_CM
+        ix, iy = round(gx), round(gy)
+        if abs(gx - ix) > 1e-9 or abs(gy - iy) > 1e-9 or not (0 <= ix < self.shape[0] and 0 <= iy < self.shape[1]):
+            return -1
+        return int(self.grid[ix, iy])
+
+
+MOVES_CM = np.array([[0.0, STEP_CM], [STEP_CM, 0.0], [0.0, -STEP_CM], [-STEP_CM, 0.0]])
+
+
+def build_lattice(office: OfficeMap) -> Lattice:
+    """Enumerate free lattice cells of ``office`` and their exact move outcomes (swept-disc test)."""
+    x0, y0, x1, y1 = office.bounds
+    sx, sy = office.start
+    xs = sx + STEP_CM * np.arange(np.ceil((x0 - sx) / STEP_CM), np.floor((x1 - sx) / STEP_CM) + 1)
+    ys = sy + STEP_CM * np.arange(np.ceil((y0 - sy) / STEP_CM), np.floor((y1 - sy) / STEP_CM) + 1)
+    gx, gy = np.meshgrid(xs, ys, indexing="ij")
+    points = np.stack([gx.ravel(), gy.ravel()], axis=1)
+    free = clearance(points, office.walls) > ROBOT_RADIUS_CM
+    cells = points[free]
+    grid = np.full(gx.shape, -1, dtype=np.int64)
+    grid.ravel()[np.flatnonzero(free)] = np.arange(len(cells))
+    origin = (float(xs[0]), float(ys[0]))
+    n = len(cells)
+    moves = np.full((n, 4), -1, dtype=np.int64)
+    ij = np.argwhere(grid >= 0)
+    order = grid[ij[:, 0], ij[:, 1]]
+    ij = ij[np.argsort(order)]
+    for action, (dx, dy) in enumerate(((0, 1), (1, 0), (0, -1), (-1, 0))):
+        ti, tj = ij[:, 0] + dx, ij[:, 1] + dy
+        ok = (ti >= 0) & (ti < grid.shape[0]) & (tj >= 0) & (tj < grid.shape[1])
+        target = np.full(n, -1)
+        target[ok] = grid[ti[ok], tj[ok]]
+        has = target >= 0
+        clear = swept_clearance(cells[has], cells[target[has]], office.walls) > ROBOT_RADIUS_CM
+        moves[np.flatnonzero(has)[clear], action] = target[has][clear]
+    reachable = np.zeros(n, dtype=bool)
+    start = grid[round((sx - origin[0]) / STEP_CM), round((sy - origin[1]) / STEP_CM)]
+    frontier = [int(start)]
+    reachable[start] = True
+    while frontier:
+        nxt = moves[frontier].ravel()
+        nxt = np.unique(nxt[nxt >= 0])
+        nxt = nxt[~reachable[nxt]]
+        reachable[nxt] = True
+        frontier = nxt.tolist()
+    return Lattice(cells, moves, reachable, origin, grid.shape, grid)

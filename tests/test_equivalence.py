@@ -1,0 +1,28 @@
+"""With its 2D extensions switched off, TwoDimA2C is stock A2C."""
+
+import torch as th
+from stable_baselines3 import A2C
+
+from sb3_twodrl import TwoDimA2C
+
+A2C_ARGS = dict(n_steps=5, gamma=0.97, gae_lambda=0.95, ent_coef=0.01, seed=3, device="cpu")
+
+
+def test_degenerate_settings_reproduce_a2c_parameters() -> None:
+    baseline = A2C("MlpPolicy", "CartPole-v1", **A2C_ARGS).learn(600)
+    model = TwoDimA2C(
+        "MlpPolicy", "CartPole-v1", temperature=1.0, punishment_weight=0.0, punishment_vf_coef=0.0, **A2C_ARGS
+    ).learn(600)
+    assert model._n_updates == baseline._n_updates >= 100
+    expected = baseline.policy.state_dict()
+    actual = model.policy.state_dict()
+    for name, tensor in expected.items():
+        assert th.allclose(actual[name], tensor, rtol=0, atol=1e-5), name
+
+
+def test_interest_temperature_changes_the_run() -> None:
+    """The equivalence above is not vacuous: the default 2D settings give other parameters."""
+    baseline = A2C("MlpPolicy", "CartPole-v1", **A2C_ARGS).learn(600)
+    model = TwoDimA2C("MlpPolicy", "CartPole-v1", **A2C_ARGS).learn(600)
+    weights = "action_net.weight"
+    assert not th.allclose(model.policy.state_dict()[weights], baseline.policy.state_dict()[weights], atol=1e-5)

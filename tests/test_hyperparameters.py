@@ -1,0 +1,44 @@
+"""Bad hyperparameters fail at construction with a ValueError naming the argument."""
+
+from typing import Any
+
+import gymnasium as gym
+import pytest
+
+from sb3_twodrl import TwoDimA2C
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        (dict(gamma=1.5), "gamma"),
+        (dict(punishment_gamma=-0.1), "punishment_gamma"),
+        (dict(gae_lambda=2.0), "gae_lambda"),
+        (dict(punishment_gae_lambda=1.1), "punishment_gae_lambda"),
+        (dict(vf_coef=-1.0), "vf_coef"),
+        (dict(ent_coef=-0.1), "ent_coef"),
+        (dict(punishment_vf_coef=-0.5), "punishment_vf_coef"),
+        (dict(punishment_weight=-1.0), "punishment_weight"),
+        (dict(punishment_weight=float("nan")), "punishment_weight"),
+        (dict(min_temperature=2.0, max_temperature=1.0), "min_temperature"),
+        (dict(min_temperature=0.0), "min_temperature"),
+        (dict(max_temperature=float("inf")), "max_temperature"),
+        (dict(temperature="hot"), "temperature"),
+        (dict(temperature=-1.0), "temperature"),
+        (dict(reward_split=3), "reward_split"),
+        (dict(use_sde=True), "use_sde"),
+    ],
+)
+def test_bad_hyperparameter(kwargs: dict[str, Any], name: str) -> None:
+    env = "Pendulum-v1" if "use_sde" in kwargs else "CartPole-v1"
+    with pytest.raises(ValueError, match=name):
+        TwoDimA2C("MlpPolicy", env, **kwargs)
+
+
+def test_unsupported_action_space() -> None:
+    class TupleActions(gym.Env):
+        observation_space = gym.spaces.Box(0, 1, (1,))
+        action_space = gym.spaces.Tuple([gym.spaces.Discrete(2), gym.spaces.Discrete(2)])
+
+    with pytest.raises(AssertionError, match="only supports"):
+        TwoDimA2C("MlpPolicy", TupleActions())

@@ -1,0 +1,61 @@
+"""BatchedNomadOffice == N single NomadOffice-v0 envs with the same seeds; the SB3 adapter."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from stable_baselines3.common.vec_env import VecMonitor
+
+import envs  # noqa: F401  (registers the IDs)
+from envs.nomad.batched import BatchedNomadOffice, make_sb3_vec_env
+
+N_ENVS, STEPS, SEED = 6, 150, 11
+
+
+@pytest.mark.parametrize(("sensor_noise", "odometry"), [(False, True), (True, True), (True, False)])
+def test_batched_equals_single_envs(sensor_noise, odometry):
+    kwargs = {"sensor_noise": sensor_noise, "observe_odometry": odometry, "max_episode_steps": 40}
+    batched = BatchedNomadOffice(N_ENVS, **kwargs)
+    singles = [gym.make("envs:NomadOffice-v0", **kwargs) for _ in range(N_ENVS)]
+    obs, _ = batched.reset(seed=SEED)
+    single_obs = [env.reset(seed=SEED + i)[0] for i, env in enumerate(singles)]
+    np.testing.assert_array_equal(obs, np.stack(single_obs))
+    actions = np.random.default_rng(0).integers(4, size=(STEPS, N_ENVS))
+    n_done = 0
+    for t in range(STEPS):
+        obs, rewards, terminated, truncated, info = batched.step(actions[t])
+        for i, env in enumerate(singles):
+            o, r, te, tr, inf = env.step(actions[t, i])
+            assert (r, te, tr) == (rewards[i], terminated[i], truncated[i])
+            assert (inf["route"], inf["is_success"], inf["punishment"]) == (
+                info["route"][i],
+                info["is_success"][i],
+                info["punishment"][i],
+            )
+            if te or tr:
+                n_done += 1
+                np.testing.assert_array_equal(o, info["final_obs"][i])
+                o, _ = env.reset()
+            np.testing.assert_array_equal(o, obs[i])
+    assert n_done > N_ENVS  # autoreset was exercised
+
+
+def test_sb3_adapter_reports_terminal_observation_and_truncation():
+    venv = VecMonitor(make_sb3_vec_env(4, seed=0, max_episode_steps=5))
+    obs = venv.reset()
+    assert obs.shape == (4, 34) and obs.dtype == np.float32
+    for t in range(5):
+        obs, _, dones, infos = venv.step(np.full(4, 0 if t % 2 == 0 else 2))
+    assert dones.all()
+    assert all(info["TimeLimit.truncated"] and "terminal_observation" in info for info in infos)
+    assert all("episode" in info and info["route"] is None for info in infos)
+
+
+def test_batched_bad_arguments():
+    with pytest.raises(ValueError, match="num_envs"):
+        BatchedNomadOffice(0)
+    with pytest.raises(ValueError, match="max_episode_steps"):
+        BatchedNomadOffice(2, max_episode_steps=0)
+    batched = BatchedNomadOffice(2)
+    batched.reset(seed=0)
+    with pytest.raises(ValueError, match="actions"):
+        batched.step(np.array([0, 4]))

@@ -1,0 +1,157 @@
+"""NomadOffice-v0 / NomadOfficeReal-v0: API checks, eq. 11-12 evaluations, routes, seeding, errors."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env as gym_check_env
+from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+import envs  # noqa: F401  (registers the IDs)
+
+IDS = ["envs:NomadOffice-v0", "envs:NomadOfficeReal-v0"]
+N, E, S, W = 0, 1, 2, 3
+SHORTCUT = [E] * 16
+DETOUR = [N] * 10 + [E] * 16 + [S] * 7
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_checkers_pass(env_id):
+    gym_check_env(gym.make(env_id, render_mode="rgb_array").unwrapped)
+    sb3_check_env(gym.make(env_id).unwrapped)
+    sb3_check_env(gym.make(env_id, observe_odometry=False).unwrapped)
+
+
+def run(env, actions):
+    rewards, infos = [], []
+    for action in actions:
+        _, reward, terminated, truncated, info = env.step(action)
+        rewards.append(reward)
+        infos.append(info)
+        if terminated or truncated:
+            break
+    return rewards, infos, terminated
+
+
+@pytest.mark.parametrize(("actions", "route"), [(SHORTCUT, "shortcut"), (DETOUR, "detour")])
+def test_scripted_routes_reach_goal(actions, route):
+    env = gym.make("envs:NomadOffice-v0")
+    env.reset(seed=0)
+    rewards, infos, terminated = run(env, actions)
+    assert terminated and len(rewards) == len(actions)
+    assert infos[-1]["is_success"] and infos[-1]["route"] == route
+    assert not any(info["is_success"] for info in infos[:-1])
+    assert rewards[:-1] == [-0.01] * (len(actions) - 1)
+    assert rewards[-1] == pytest.approx(4.99)
+    assert all(r == (5.0 if i["is_success"] else 0.0) - i["punishment"] for r, i in zip(rewards, infos, strict=True))
+    assert infos[-1]["position_cm"][0] == 250.0
+    assert len(SHORTCUT) <= 0.6 * len(DETOUR)
+
+
+def test_route_label_follows_last_passage():
+    env = gym.make("envs:NomadOffice-v0")
+    env.reset(seed=0)
+    _, infos, _ = run(env, [N] * 4 + [S] * 4 + [E] * 6)
+    assert infos[0]["route"] is None
+    assert infos[3]["route"] == "detour"
+    assert infos[-1]["route"] == "shortcut"
+
+
+def test_collision_into_wall_and_one_cm_clearance_along_wall():
+    env = gym.make("envs:NomadOffice-v0")
+    env.reset(options={"position": (90.0, 40.0)})
+    _, reward, terminated, _, info = env.step(S)  # centre would be 30 cm from the floor: touching
+    assert terminated and info["collision"] and info["punishment"] == 1.0 and reward == -1.0
+    assert info["position_cm"] == (90.0, 40.0) and not info["is_success"]
+    env.reset(options={"position": (90.0, 31.0)})  # 1 cm clearance above the floor
+    _, infos, terminated = run(env, [E, E, W])
+    assert not terminated and not any(i["collision"] for i in infos)
+    assert infos[-1]["position_cm"] == pytest.approx((100.0, 31.0))
+
+
+@pytest.mark.parametrize("position", [(170.0, 110.0), (90.0, 20.0), (-50.0, 60.0), (90.0, 400.0), (1, 2, 3), "x"])
+def test_reset_position_in_wall_or_outside_is_value_error(position):
+    env = gym.make("envs:NomadOffice-v0")
+    with pytest.raises(ValueError, match="position"):
+        env.reset(options={"position": position})
+
+
+def test_reset_position_on_lattice_matches_walking_there():
+    env = gym.make("envs:NomadOffice-v0")
+    env.reset(seed=0)
+    walked, *_ = env.step(E)
+    placed, info = env.reset(options={"position": (100.0, 60.0)})
+    assert info["position_cm"] == (100.0, 60.0)
+    np.testing.assert_array_equal(walked, placed)
+
+
+def rollout(env_id, seed, **kwargs):
+    env = gym.make(env_id, **kwargs)
+    env.action_space.seed(seed)
+    obs, _ = env.reset(seed=seed)
+    trace = [obs]
+    for _ in range(60):
+        obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+        trace += [obs, reward, info["position_cm"]]
+        if terminated or truncated:
+            obs, _ = env.reset()
+            trace.append(obs)
+    return trace
+
+
+@pytest.mark.parametrize(("env_id", "kwargs"), [(IDS[0], {}), (IDS[0], {"sensor_noise": True}), (IDS[1], {})])
+def test_same_seed_same_episode(env_id, kwargs):
+    a, b, c = rollout(env_id, 3, **kwargs), rollout(env_id, 3, **kwargs), rollout(env_id, 4, **kwargs)
+    assert all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
+    if kwargs or env_id == IDS[1]:
+        assert not all(np.array_equal(x, y) for x, y in zip(a, c, strict=False))
+
+
+def test_real_model_is_noisy_and_slips():
+    env = gym.make("envs:NomadOfficeReal-v0")
+    obs0, _ = env.reset(seed=1)
+    _, _, _, _, info = env.step(E)
+    assert info["position_cm"] != (100.0, 60.0)
+    assert obs0[-2:] == pytest.approx(np.array([90 / 330, 60 / 245]))  # odometry is dead reckoning
+    ideal, _ = gym.make("envs:NomadOffice-v0").reset(seed=1)
+    assert not np.array_equal(obs0[:32], ideal[:32])
+
+
+def test_truncated_by_time_limit():
+    env = gym.make("envs:NomadOffice-v0")
+    env.reset(seed=0)
+    for t in range(200):
+        *_, terminated, truncated, info = env.step(E if t % 2 == 0 else W)
+    assert truncated and not terminated and not info["is_success"]
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "error", "message"),
+    [
+        ({"map": "/no/such/office.json"}, ValueError, "/no/such/office.json"),
+        ({"sensor_noise": "yes"}, TypeError, "sensor_noise"),
+        ({"step_sd_cm": -1.0}, ValueError, "step_sd_cm"),
+        ({"slip_sd_cm": float("nan")}, ValueError, "slip_sd_cm"),
+        ({"observe_odometry": "no"}, TypeError, "observe_odometry"),
+        ({"render_mode": "ansi"}, ValueError, "render_mode"),
+    ],
+)
+def test_bad_constructor_arguments(kwargs, error, message):
+    with pytest.raises(error, match=message):
+        gym.make("envs:NomadOffice-v0", **kwargs)
+
+
+def test_bad_action_and_options():
+    env = gym.make("envs:NomadOffice-v0").unwrapped
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="action"):
+        env.step(4)
+    with pytest.raises(ValueError, match="options"):
+        env.reset(options={"pos": (90, 60)})
+
+
+def test_render_rgb_array():
+    env = gym.make("envs:NomadOffice-v0", render_mode="rgb_array")
+    env.reset(seed=0)
+    run(env, [N, E, E])
+    frame = env.render()
+    assert frame.ndim == 3 and frame.shape[2] == 3 and frame.dtype == np.uint8

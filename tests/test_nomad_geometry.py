@@ -1,0 +1,114 @@
+"""Geometry and sensors against hand-computed values (issue 4); map-file validation."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from envs.nomad.geometry import ROBOT_RADIUS_CM, load_map, swept_clearance
+from envs.nomad.office import office_core
+from envs.nomad.sensors import NoiseModel, exact_ranges, normalise, realistic_readings
+
+OFFICE = load_map()
+
+
+def sensor_at(centre, k):
+    """Position of sensor k (k * 22.5 degrees counter-clockwise from north) on the 30 cm body."""
+    angle = math.radians(22.5 * k)
+    return centre[0] - 30 * math.sin(angle), centre[1] + 30 * math.cos(angle)
+
+
+def test_axis_readings_at_start():
+    ranges = exact_ranges(OFFICE, np.array([[90.0, 60.0]]))[0]
+    # sonar 0 north: top wall y=245 from sensor (90, 90); 4 west: x=0 from (60, 60);
+    # 8 south: floor from (90, 30); 12 east: x=330 from (120, 60) (block corner outside the cone)
+    for k, expected in {0: 155.0, 4: 60.0, 8: 30.0, 12: 210.0}.items():
+        assert ranges[k] == pytest.approx(expected, abs=1.0)
+        assert ranges[16 + k] == pytest.approx(expected, abs=1.0)  # IR beam, same axis
+    obs = normalise(ranges)
+    assert obs[8] == 0.0  # sonar below 40 cm saturates at its minimum
+    assert obs[16 + 8] == pytest.approx(30 / 40)  # IR within range
+    assert obs[16 + 0] == 1.0  # IR beyond 40 cm saturates
+
+
+def test_oblique_readings_see_block_top_inside_cone():
+    centre = (110.0, 170.0)
+    sx, sy = sensor_at(centre, 10)  # facing south-east (225 degrees counter-clockwise from north)
+    drop = sy - 125.0  # height above the block's top face y = 125, x in [140, 200]
+    # nearest cone point is where the cone's south-most edge (22.5 + 11.25 degrees off south) meets the face
+    sonar = drop / math.cos(math.radians(45 - 11.25))
+    ir = drop / math.cos(math.radians(45))  # beam along the axis
+    assert 140 < sx + drop * math.tan(math.radians(45 - 11.25)) < 200
+    ranges = exact_ranges(OFFICE, np.array([centre]))[0]
+    assert ranges[10] == pytest.approx(sonar, abs=1.0)
+    assert ranges[26] == pytest.approx(ir, abs=1.0)
+
+
+def test_swept_disc_touching_counts_as_collision():
+    walls = OFFICE.walls
+    into_floor = swept_clearance(np.array([[90.0, 40.0]]), np.array([[90.0, 30.0]]), walls)
+    along_floor = swept_clearance(np.array([[90.0, 31.0]]), np.array([[100.0, 31.0]]), walls)
+    assert into_floor[0] <= ROBOT_RADIUS_CM
+    assert along_floor[0] == pytest.approx(31.0)
+    # a wall tip between the two ends: both end discs clear (30.2 cm), the swept disc does not (29.8 cm)
+    tip = np.array([[5.0, 29.8, 5.0, 100.0]])
+    assert swept_clearance(np.array([[0.0, 0.0]]), np.array([[0.0, 0.0]]), tip)[0] > ROBOT_RADIUS_CM
+    assert swept_clearance(np.array([[0.0, 0.0]]), np.array([[10.0, 0.0]]), tip)[0] == pytest.approx(29.8)
+
+
+def write_map(tmp_path, **changes):
+    data = json.loads(open(OFFICE.source).read())
+    data.update(changes)
+    path = tmp_path / "office.json"
+    path.write_text(json.dumps(data))
+    return path
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        ({"bounds": [0, 0, 330]}, "bounds"),
+        ({"walls": [[0, 0, 10]]}, r"walls\[0\]"),
+        ({"walls": [[5, 5, 5, 5]]}, "zero length"),
+        ({"start": [5, 5]}, "start"),
+        ({"regions": {"goal": [0, 0, 1, 1], "shortcut": [0, 0, 1, 1]}}, "detour"),
+        ({"units": "inch"}, "units"),
+    ],
+)
+def test_bad_map_files_name_file_and_entry(tmp_path, changes, message):
+    path = write_map(tmp_path, **changes)
+    with pytest.raises(ValueError, match=message) as err:
+        load_map(path)
+    assert str(path) in str(err.value)
+
+
+def test_missing_and_malformed_map_files(tmp_path):
+    with pytest.raises(ValueError, match="does not exist"):
+        load_map(tmp_path / "nope.json")
+    bad = tmp_path / "bad.json"
+    bad.write_text("{not json")
+    with pytest.raises(ValueError, match="not valid JSON"):
+        load_map(bad)
+    data = json.loads(open(OFFICE.source).read())
+    del data["walls"]
+    bad.write_text(json.dumps(data))
+    with pytest.raises(ValueError, match="missing keys"):
+        load_map(bad)
+    with pytest.raises(TypeError, match="map must be a path"):
+        load_map(42)
+
+
+def test_sensor_source_seam_for_databases():
+    core = office_core()
+    assert core.readings.shape == (len(core.lattice.cells), 32) and core.lattice.reachable.all()
+    assert core.lattice.index(OFFICE.start) == core.start_cell and core.lattice.index((91.0, 60.0)) == -1
+    cells = np.repeat(core.lattice.cells[:3], 4, axis=0)  # K = 4 recordings of 3 cells
+    recorded = realistic_readings(OFFICE, cells, NoiseModel(), np.random.default_rng(0))
+    assert recorded.shape == (12, 32) and recorded.dtype == np.float32
+    assert recorded.min() >= 0.0 and recorded.max() <= 1.0
+    assert not np.array_equal(recorded[0], recorded[1])
+    np.testing.assert_allclose(
+        realistic_readings(OFFICE, cells, NoiseModel(0, 0, 0, 0, 0), np.random.default_rng(0)),
+        np.repeat(core.readings[:3], 4, axis=0),
+    )

@@ -1,0 +1,58 @@
+"""Each ``reward_split`` mode turns (reward, info) into the right (r_R, r_P), and bad feedback is caught."""
+
+from typing import Any
+
+import numpy as np
+import pytest
+
+from sb3_twodrl import TwoDimA2C
+from tests.toy_envs import ScriptedFeedbackEnv
+
+FEEDBACK: dict[str, list[tuple[float, dict[str, Any]]]] = {
+    "info": [(4.99, {"punishment": 0.01}), (-1.0, {"punishment": 1.0})],
+    "cost": [(2.0, {"cost": 0.5}), (-3.0, {"cost": 0.0})],
+    "sign": [(2.0, {}), (-3.0, {})],
+}
+EXPECTED = {
+    "info": ([5.0, 0.0], [0.01, 1.0]),
+    "cost": ([2.0, -3.0], [0.5, 0.0]),
+    "sign": ([2.0, 0.0], [0.0, 3.0]),
+}
+
+
+def rollout_streams(feedback: list, reward_split: Any) -> tuple[np.ndarray, np.ndarray]:
+    model = TwoDimA2C("MlpPolicy", ScriptedFeedbackEnv(feedback), n_steps=4, reward_split=reward_split, seed=0)
+    model.learn(4)
+    return model.rollout_buffer.rewards[:, 0], model.rollout_buffer.punishments[:, 0]
+
+
+@pytest.mark.parametrize("mode", ["info", "cost", "sign"])
+def test_named_modes(mode: str) -> None:
+    rewards, punishments = rollout_streams(FEEDBACK[mode], mode)
+    reward_r, reward_p = EXPECTED[mode]
+    np.testing.assert_allclose(rewards, reward_r * 2, atol=1e-6)
+    np.testing.assert_allclose(punishments, reward_p * 2, atol=1e-6)
+
+
+@pytest.mark.parametrize("mode", ["info", "cost", "sign"])
+def test_auto_picks_the_mode_from_the_info_keys(mode: str) -> None:
+    np.testing.assert_array_equal(rollout_streams(FEEDBACK[mode], "auto"), rollout_streams(FEEDBACK[mode], mode))
+
+
+def test_callable_split() -> None:
+    rewards, punishments = rollout_streams([(1.5, {"danger": 0.25})], lambda r, info: (2 * r, info["danger"]))
+    np.testing.assert_allclose(rewards, 3.0)
+    np.testing.assert_allclose(punishments, 0.25)
+
+
+@pytest.mark.parametrize("punishment", [-0.5, float("nan"), float("inf")])
+def test_bad_punishment_is_an_error_at_its_step(punishment: float) -> None:
+    feedback = [(0.0, {"punishment": 0.0})] * 6 + [(0.0, {"punishment": punishment})]
+    model = TwoDimA2C("MlpPolicy", ScriptedFeedbackEnv(feedback), n_steps=4, seed=0)
+    with pytest.raises(ValueError, match="at timestep 7"):
+        model.learn(8)
+
+
+def test_unknown_mode_is_rejected() -> None:
+    with pytest.raises(ValueError, match="reward_split"):
+        TwoDimA2C("MlpPolicy", "CartPole-v1", reward_split="net")
