@@ -1,0 +1,211 @@
+"""Navigation metrics for any SB3 algorithm: goal rate, reward per step, route shares, collisions.
+
+The metrics are those of the 2D-RL paper's figures 3-5. They are computed from what the
+environment reports in ``info`` at the end of each episode, so the callback works with any
+algorithm (A2C, TwoDimA2C, PPO, ...) and any environment that sets the keys below.
+
+Keys read from ``info`` (all optional):
+
+- ``"episode"``: ``{"r": return, "l": length}``, set by SB3's ``Monitor``/``VecMonitor`` at the
+  end of an episode. When it is missing, the callback sums the rewards it sees itself
+  (``self.locals["rewards"]``), which are the *normalised* rewards if ``VecNormalize`` is used.
+- ``"is_success"``: whether the episode reached the goal (read at the episode's last step).
+- ``"route"``: ``"shortcut"``, ``"detour"`` or ``None`` (not committed yet). The label of an
+  episode is the last non-``None`` label seen during it.
+- ``"collision"``: whether a step collided; an episode collided if any of its steps did.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from stable_baselines3.common.callbacks import BaseCallback
+
+__all__ = [
+    "EpisodeRecord",
+    "EpisodeTracker",
+    "NavigationMetricsCallback",
+    "StopAfterEpisodes",
+    "summarize_episodes",
+]
+
+
+@dataclass(frozen=True)
+class EpisodeRecord:
+    """What one finished episode contributes to the metrics."""
+
+    episode_return: float
+    length: int
+    success: bool | None = None  # None: the env never said (no "is_success" key)
+    route: str | None = None  # last non-None info["route"] of the episode
+    collision: bool | None = None  # None: the env never said (no "collision" key)
+    has_route_key: bool = False  # the env sets info["route"] at all
+
+
+def summarize_episodes(episodes: Iterable[EpisodeRecord]) -> dict[str, float]:
+    """Metrics over a set of finished episodes (the definitions used everywhere in this package).
+
+    - ``goal_rate``: share of episodes with ``is_success`` true, over the episodes that carry the key.
+    - ``reward_per_step``: mean over episodes of (episode return / episode length) (paper, figure 4).
+    - ``shortcut_share`` / ``detour_share``: among the episodes whose route is labelled
+      (``"shortcut"`` or ``"detour"``), the share labelled shortcut / detour. The two sum to 1.
+      Episodes that ended before committing to a route (e.g. an early collision) do not count.
+      NaN when no episode is labelled.
+    - ``collision_rate``: share of episodes in which a collision happened.
+    - ``episodes``: how many episodes were summarised; ``labelled_episodes``: how many carry a route.
+
+    A metric whose key the env never set is absent from the result; a metric over an empty
+    set is NaN.
+    """
+    eps = list(episodes)
+    out: dict[str, float] = {"episodes": float(len(eps))}
+    nan = math.nan
+    if eps:
+        out["reward_per_step"] = float(np.mean([e.episode_return / max(e.length, 1) for e in eps]))
+    else:
+        out["reward_per_step"] = nan
+    flagged = [e.success for e in eps if e.success is not None]
+    if flagged or not eps:
+        out["goal_rate"] = float(np.mean(flagged)) if flagged else nan
+    collided = [e.collision for e in eps if e.collision is not None]
+    if collided or not eps:
+        out["collision_rate"] = float(np.mean(collided)) if collided else nan
+    if any(e.has_route_key for e in eps) or not eps:
+        labelled = [e.route for e in eps if e.route in ("shortcut", "detour")]
+        out["labelled_episodes"] = float(len(labelled))
+        if labelled:
+            out["shortcut_share"] = labelled.count("shortcut") / len(labelled)
+            out["detour_share"] = labelled.count("detour") / len(labelled)
+        else:
+            out["shortcut_share"] = nan
+            out["detour_share"] = nan
+    return out
+
+
+class EpisodeTracker:
+    """Follows ``n_envs`` parallel environments step by step and emits one record per finished episode."""
+
+    def __init__(self, n_envs: int) -> None:
+        self.n_envs = n_envs
+        self._returns = np.zeros(n_envs, dtype=np.float64)
+        self._lengths = np.zeros(n_envs, dtype=np.int64)
+        self._routes: list[str | None] = [None] * n_envs
+        self._collided: list[bool | None] = [None] * n_envs
+        self._route_key = [False] * n_envs
+
+    def reset(self, env_index: int | None = None) -> None:
+        indices = range(self.n_envs) if env_index is None else [env_index]
+        for i in indices:
+            self._returns[i] = 0.0
+            self._lengths[i] = 0
+            self._routes[i] = None
+            self._collided[i] = None
+            self._route_key[i] = False
+
+    def step(
+        self,
+        infos: Sequence[Mapping[str, Any]],
+        dones: Sequence[bool] | np.ndarray,
+        rewards: Sequence[float] | np.ndarray | None = None,
+    ) -> list[EpisodeRecord]:
+        """Account for one vectorised step; returns the records of the episodes that ended in it."""
+        finished: list[EpisodeRecord] = []
+        for i, info in enumerate(infos):
+            if rewards is not None:
+                self._returns[i] += float(rewards[i])
+            self._lengths[i] += 1
+            if "route" in info:
+                self._route_key[i] = True
+                if info["route"] is not None:
+                    self._routes[i] = str(info["route"])
+            if "collision" in info:
+                self._collided[i] = bool(self._collided[i]) or bool(info["collision"])
+            if not dones[i]:
+                continue
+            ep_return, ep_length = float(self._returns[i]), int(self._lengths[i])
+            episode = info.get("episode")
+            if episode is not None:
+                ep_return, ep_length = float(episode["r"]), int(episode["l"])
+            success = info.get("is_success")
+            finished.append(
+                EpisodeRecord(
+                    episode_return=ep_return,
+                    length=ep_length,
+                    success=None if success is None else bool(success),
+                    route=self._routes[i],
+                    collision=self._collided[i],
+                    has_route_key=self._route_key[i],
+                )
+            )
+            self.reset(i)
+        return finished
+
+
+class NavigationMetricsCallback(BaseCallback):
+    """Logs the paper's navigation metrics to SB3's logger (so to TensorBoard) at every rollout end.
+
+    Keys: ``rollout/goal_rate``, ``rollout/reward_per_step``, ``rollout/shortcut_share``,
+    ``rollout/detour_share``, ``rollout/collision_rate`` (definitions: :func:`summarize_episodes`),
+    computed over the last ``window`` finished episodes (like SB3's ``rollout/ep_rew_mean``, which
+    uses the last 100). Nothing is logged before the first episode ends. Route shares are logged
+    only for envs that set ``info["route"]`` (NaN while no episode in the window is labelled),
+    the goal rate only for envs that set ``info["is_success"]``, the collision rate only for envs
+    that set ``info["collision"]``.
+
+    It reads ``infos``, ``dones`` (and ``rewards`` only when ``info["episode"]`` is absent) from
+    ``self.locals``, so it works with any SB3 algorithm.
+    """
+
+    def __init__(self, window: int = 100, prefix: str = "rollout", verbose: int = 0) -> None:
+        super().__init__(verbose)
+        if window < 1:
+            raise ValueError(f"window must be >= 1, got {window}")
+        self.window = window
+        self.prefix = prefix
+        self.episodes: deque[EpisodeRecord] = deque(maxlen=window)
+        self.total_episodes = 0
+        self._tracker: EpisodeTracker | None = None
+
+    def _init_callback(self) -> None:
+        self._tracker = EpisodeTracker(self.training_env.num_envs)
+
+    def _on_step(self) -> bool:
+        assert self._tracker is not None
+        finished = self._tracker.step(self.locals["infos"], self.locals["dones"], self.locals.get("rewards"))
+        self.episodes.extend(finished)
+        self.total_episodes += len(finished)
+        return True
+
+    def metrics(self) -> dict[str, float]:
+        """The current metrics over the window (see :func:`summarize_episodes`)."""
+        return summarize_episodes(self.episodes)
+
+    def _on_rollout_end(self) -> None:
+        if not self.episodes:
+            return
+        for key, value in self.metrics().items():
+            if key in ("episodes", "labelled_episodes"):
+                continue
+            self.logger.record(f"{self.prefix}/{key}", value)
+
+
+class StopAfterEpisodes(BaseCallback):
+    """Stops ``learn()`` once ``max_episodes`` episodes have finished, counted over all envs.
+
+    Unlike SB3's ``StopTrainingOnMaxEpisodes`` (which stops after ``max_episodes`` episodes *per
+    env*), the count here is the total, which is what "K learning episodes" means in the paper.
+    """
+
+    def __init__(self, max_episodes: int, verbose: int = 0) -> None:
+        super().__init__(verbose)
+        self.max_episodes = max_episodes
+        self.n_episodes = 0
+
+    def _on_step(self) -> bool:
+        self.n_episodes += int(np.sum(self.locals["dones"]))
+        return self.n_episodes < self.max_episodes

@@ -1,0 +1,164 @@
+"""rl-zoo3 integration: register TwoDimA2C as the algorithm ``twoda2c`` and give it an Optuna sampler.
+
+>>> from sb3_twodrl.zoo import register_zoo
+>>> register_zoo()  # then rl_zoo3.train.train() / rl_zoo3.enjoy.enjoy() accept --algo twoda2c
+
+rl-zoo3 looks algorithms up in ``rl_zoo3.utils.ALGOS`` and samplers in
+``rl_zoo3.hyperparams_opt.HYPERPARAMS_SAMPLER`` / ``HYPERPARAMS_CONVERTER`` (the converter turns a
+stored Optuna trial back into constructor arguments, for ``--trial-id``). Those are module-level
+dicts that the training and enjoy scripts import by reference, so registering means adding keys to
+them, before rl-zoo3 parses its command line (its ``--algo`` choices are taken from ``ALGOS``).
+
+Requires the ``zoo`` extra (rl-zoo3, optuna, pandas).
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import os
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+ALGO_KEY = "twoda2c"
+
+__all__ = [
+    "ALGO_KEY",
+    "convert_twoda2c_params",
+    "prepare_zoo_argv",
+    "register_zoo",
+    "run_zoo_entry",
+    "sample_twoda2c_params",
+]
+
+
+def _twoda2c_class() -> type | None:
+    try:
+        from sb3_twodrl import TwoDimA2C  # type: ignore[attr-defined]
+    except ImportError:
+        return None
+    return TwoDimA2C
+
+
+def convert_twoda2c_params(sampled_params: dict[str, Any]) -> dict[str, Any]:
+    """Turn sampled (or stored) trial parameters into TwoDimA2C constructor arguments."""
+    from rl_zoo3.hyperparams_opt import convert_onpolicy_params
+
+    params = dict(sampled_params)
+    if "one_minus_punishment_gae_lambda" in params:
+        params["punishment_gae_lambda"] = 1.0 - params.pop("one_minus_punishment_gae_lambda")
+    return convert_onpolicy_params(params)
+
+
+def sample_twoda2c_params(trial: Any, n_actions: int, n_envs: int, additional_args: dict) -> dict[str, Any]:
+    """Optuna search space of TwoDimA2C: A2C's space plus the 2D-RL hyperparameters.
+
+    The A2C part (``n_steps``, ``gamma``, ``gae_lambda``, ``learning_rate``, ``max_grad_norm``,
+    ``ent_coef``, network) is the same as rl-zoo3's A2C sampler, so the two algorithms are tuned on
+    equal terms. Added:
+
+    - ``punishment_gamma`` in [0, 0.99]: the paper's point is that punishment is short-sighted (0.1);
+    - ``one_minus_punishment_gae_lambda`` in [1e-4, 1] (log): punishment GAE lambda in [0, 0.9999];
+    - ``punishment_vf_coef`` in [0.1, 1] and ``punishment_weight`` in [0.25, 4] (log);
+    - ``min_temperature`` in [1e-3, 0.5] (log), if TwoDimA2C takes it (the interest floor).
+    """
+    n_steps = trial.suggest_categorical("n_steps", [5, 8, 16, 32, 64, 128, 256, 512])
+    one_minus_gamma = trial.suggest_float("one_minus_gamma", 0.0001, 0.2, log=True)
+    one_minus_gae_lambda = trial.suggest_float("one_minus_gae_lambda", 0.0001, 0.1, log=True)
+    learning_rate = trial.suggest_float("learning_rate", 1e-5, 0.003, log=True)
+    max_grad_norm = trial.suggest_float("max_grad_norm", 0.3, 2)
+    ent_coef = trial.suggest_float("ent_coef", 1e-8, 0.1, log=True)
+    net_arch = trial.suggest_categorical("net_arch", ["small", "medium"])
+    activation_fn = trial.suggest_categorical("activation_fn", ["tanh", "relu"])
+
+    punishment_gamma = trial.suggest_float("punishment_gamma", 0.0, 0.99)
+    one_minus_p_lambda = trial.suggest_float("one_minus_punishment_gae_lambda", 0.0001, 1.0, log=True)
+    punishment_vf_coef = trial.suggest_float("punishment_vf_coef", 0.1, 1.0)
+    punishment_weight = trial.suggest_float("punishment_weight", 0.25, 4.0, log=True)
+
+    trial.set_user_attr("gamma", 1 - one_minus_gamma)
+    sampled: dict[str, Any] = {
+        "n_steps": n_steps,
+        "one_minus_gamma": one_minus_gamma,
+        "one_minus_gae_lambda": one_minus_gae_lambda,
+        "learning_rate": learning_rate,
+        "ent_coef": ent_coef,
+        "max_grad_norm": max_grad_norm,
+        "net_arch": net_arch,
+        "activation_fn": activation_fn,
+        "punishment_gamma": punishment_gamma,
+        "one_minus_punishment_gae_lambda": one_minus_p_lambda,
+        "punishment_vf_coef": punishment_vf_coef,
+        "punishment_weight": punishment_weight,
+    }
+    cls = _twoda2c_class()
+    if cls is not None and "min_temperature" in inspect.signature(cls.__init__).parameters:
+        sampled["min_temperature"] = trial.suggest_float("min_temperature", 1e-3, 0.5, log=True)
+    return convert_twoda2c_params(sampled)
+
+
+def register_zoo(algo_class: type | None = None) -> bool:
+    """Register ``twoda2c`` in rl-zoo3's algorithm, sampler and converter tables (idempotent).
+
+    ``algo_class`` defaults to :class:`sb3_twodrl.TwoDimA2C`. Returns False (and registers nothing)
+    when that class is not available.
+    """
+    from rl_zoo3 import hyperparams_opt, utils
+
+    cls = algo_class or _twoda2c_class()
+    if cls is None:
+        return False
+    utils.ALGOS[ALGO_KEY] = cls
+    hyperparams_opt.HYPERPARAMS_SAMPLER[ALGO_KEY] = sample_twoda2c_params
+    hyperparams_opt.HYPERPARAMS_CONVERTER[ALGO_KEY] = convert_twoda2c_params
+    return True
+
+
+def _has_option(argv: list[str], *names: str) -> bool:
+    return any(a in names or any(a.startswith(n + "=") for n in names) for a in argv)
+
+
+def _option_value(argv: list[str], *names: str) -> str | None:
+    for i, a in enumerate(argv):
+        for n in names:
+            if a == n and i + 1 < len(argv):
+                return argv[i + 1]
+            if a.startswith(n + "="):
+                return a.split("=", 1)[1]
+    return None
+
+
+def prepare_zoo_argv(
+    argv: list[str], hyperparams_dir: str | os.PathLike | None = None, gym_packages: tuple[str, ...] = ("envs",)
+) -> list[str]:
+    """Make rl-zoo3's command line ready for this project (used by ``scripts/train.py`` and ``enjoy.py``).
+
+    Registers ``twoda2c`` (:func:`register_zoo`), imports ``gym_packages`` that are installed (so
+    ``--gym-packages envs`` is optional), and, when ``hyperparams_dir`` is given and no
+    ``-conf/--conf-file`` is, adds ``--conf-file <hyperparams_dir>/<algo>.yml`` if that file exists.
+    """
+    register_zoo()
+    for package in gym_packages:
+        try:
+            importlib.import_module(package)
+        except ImportError:
+            pass
+    argv = list(argv)
+    if hyperparams_dir is not None and not _has_option(argv, "-conf", "--conf-file"):
+        algo = _option_value(argv, "--algo") or "ppo"
+        conf = Path(hyperparams_dir) / f"{algo}.yml"
+        if conf.is_file():
+            argv += ["--conf-file", str(conf)]
+    return argv
+
+
+def run_zoo_entry(prog: str, argv: list[str], entry: Callable[[], Any]) -> None:
+    """Call an rl-zoo3 entry point (which parses ``sys.argv``) with ``argv``."""
+    old = sys.argv
+    sys.argv = [prog, *argv]
+    try:
+        entry()
+    finally:
+        sys.argv = old

@@ -1,0 +1,172 @@
+"""rl-zoo3 integration: tiny-budget training for both algorithms, a two-trial Optuna study, enjoy."""
+
+from __future__ import annotations
+
+import glob
+import runpy
+import sys
+from pathlib import Path
+
+import gymnasium as gym
+import pytest
+import yaml
+
+pytest.importorskip("rl_zoo3")
+pytest.importorskip("optuna")
+
+import optuna
+from stable_baselines3 import A2C
+
+import tests.toy_nav  # noqa: F401  (registers ToyNav-v0)
+from sb3_twodrl.zoo import ALGO_KEY, convert_twoda2c_params, register_zoo, sample_twoda2c_params
+
+ROOT = Path(__file__).resolve().parents[1]
+HYPERPARAMS = ROOT / "scripts" / "hyperparams"
+ZOO_ENVS = ["NomadOffice-v0", "NomadOfficeMemorable-v0", "CartPole-v1", "Acrobot-v1"]
+
+try:
+    from sb3_twodrl import TwoDimA2C  # type: ignore[attr-defined]
+except ImportError:  # the algorithm lives on another branch until merged
+    TwoDimA2C = None
+
+needs_twoda2c = pytest.mark.skipif(TwoDimA2C is None, reason="sb3_twodrl.TwoDimA2C not available")
+ALGOS = ["a2c", pytest.param("twoda2c", marks=needs_twoda2c)]
+
+
+def run_script(name: str, argv: list[str], monkeypatch) -> None:
+    monkeypatch.setattr(sys, "argv", [name, *argv])
+    runpy.run_path(str(ROOT / "scripts" / name), run_name="__main__")
+
+
+def toy_conf(tmp_path: Path, algo: str) -> Path:
+    entry = {
+        "n_envs": 2,
+        "n_timesteps": 200,
+        "policy": "MlpPolicy",
+        "gamma": 0.9,
+        "n_steps": 5,
+        "callback": ["sb3_twodrl.callbacks.NavigationMetricsCallback"],
+    }
+    if algo == "twoda2c":
+        entry["punishment_gamma"] = 0.1
+    path = tmp_path / f"{algo}_toy.yml"
+    path.write_text(yaml.safe_dump({"ToyNav-v0": entry}))
+    return path
+
+
+def scalar_tags(tb_dir: Path) -> set[str]:
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    tags: set[str] = set()
+    for event_file in glob.glob(str(tb_dir / "**" / "events.out.tfevents.*"), recursive=True):
+        acc = EventAccumulator(event_file)
+        acc.Reload()
+        tags |= set(acc.Tags()["scalars"])
+    return tags
+
+
+def test_yaml_covers_the_envs_for_both_algorithms():
+    for algo in ("a2c", "twoda2c"):
+        conf = yaml.safe_load((HYPERPARAMS / f"{algo}.yml").read_text())
+        for env_id in ZOO_ENVS:
+            assert env_id in conf, (algo, env_id)
+            assert "sb3_twodrl.callbacks.NavigationMetricsCallback" in conf[env_id]["callback"]
+        assert conf["NomadOffice-v0"]["gamma"] == 0.9
+    assert yaml.safe_load((HYPERPARAMS / "twoda2c.yml").read_text())["NomadOffice-v0"]["punishment_gamma"] == 0.1
+
+
+@pytest.mark.parametrize("algo", ALGOS)
+def test_train_tiny_budget_leaves_model_and_tensorboard(algo, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    argv = ["--algo", algo, "--env", "ToyNav-v0", "--gym-packages", "tests.toy_nav"]
+    argv += ["-conf", str(toy_conf(tmp_path, algo))]
+    argv += ["-n", "200", "--eval-freq", "100", "--eval-episodes", "2", "--save-freq", "100", "--log-interval", "1"]
+    argv += ["-tb", "tb", "-f", "logs", "--seed", "0", "--device", "cpu"]
+    run_script("train.py", argv, monkeypatch)
+    model_path = tmp_path / "logs" / algo / "ToyNav-v0_1" / "ToyNav-v0.zip"
+    assert model_path.is_file()
+    assert list((tmp_path / "logs" / algo / "ToyNav-v0_1").glob("rl_model_*_steps.zip"))  # --save-freq
+    assert (tmp_path / "logs" / algo / "ToyNav-v0_1" / "evaluations.npz").is_file()  # --eval-freq
+    register_zoo()
+    from rl_zoo3.utils import ALGOS as ZOO_ALGOS
+
+    model = ZOO_ALGOS[algo].load(model_path, device="cpu")
+    assert model.num_timesteps >= 200
+    tags = scalar_tags(tmp_path / "tb")
+    for key in ("goal_rate", "reward_per_step", "shortcut_share", "detour_share", "collision_rate"):
+        assert f"rollout/{key}" in tags
+    if algo == "twoda2c":
+        assert "train/interest" in tags
+    # enjoy replays it (no rendering in tests)
+    run_script(
+        "enjoy.py",
+        ["--algo", algo, "--env", "ToyNav-v0", "--gym-packages", "tests.toy_nav", "-n", "20", "--no-render"],
+        monkeypatch,
+    )
+    if algo == "a2c":  # and records a video (rl-zoo3's record_video)
+        pytest.importorskip("moviepy")
+        record = ["--algo", algo, "--env", "ToyNav-v0", "--gym-packages", "tests.toy_nav"]
+        run_script("enjoy.py", [*record, "--record", "-o", "videos", "-n", "10"], monkeypatch)
+        assert list((tmp_path / "videos").glob("*.mp4"))
+
+
+@pytest.mark.parametrize("env_id", ["CartPole-v1", "Acrobot-v1", "NomadOffice-v0"])
+@pytest.mark.parametrize("algo", ALGOS)
+def test_shipped_hyperparams_train(algo, env_id, tmp_path, monkeypatch):
+    if env_id not in gym.registry:
+        pytest.importorskip("envs.nomad")
+    monkeypatch.chdir(tmp_path)
+    argv = ["--algo", algo, "--env", env_id, "-n", "64", "--eval-freq", "-1"]
+    argv += ["-f", "logs", "--seed", "1", "--device", "cpu"]
+    run_script("train.py", argv, monkeypatch)
+    assert (tmp_path / "logs" / algo / f"{env_id}_1" / f"{env_id}.zip").is_file()
+
+
+@pytest.mark.parametrize("algo", ALGOS)
+def test_two_trial_optuna_study_with_shared_storage(algo, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    storage = str(tmp_path / "study.log")  # journal file: several machines can share it (or an RDB URL)
+    argv = ["--algo", algo, "--env", "ToyNav-v0", "--gym-packages", "tests.toy_nav"]
+    argv += ["-conf", str(toy_conf(tmp_path, algo))]
+    argv += ["-optimize", "--n-trials", "2", "-n", "100", "--n-evaluations", "1", "--eval-episodes", "2"]
+    argv += ["--sampler", "random", "--pruner", "none", "--no-optim-plots", "--storage", storage]
+    argv += ["--study-name", "zoo-test", "-f", "logs", "--seed", "0", "--device", "cpu"]
+    run_script("train.py", argv, monkeypatch)
+    journal = optuna.storages.JournalStorage(optuna.storages.journal.JournalFileBackend(storage))
+    study = optuna.load_study(study_name="zoo-test", storage=journal)
+    assert len(study.trials) == 2
+    assert any(t.state == optuna.trial.TrialState.COMPLETE for t in study.trials)
+    assert list((tmp_path / "logs" / algo).glob("report_ToyNav-v0_*.csv"))
+
+
+def test_twoda2c_sampler_space():
+    study = optuna.create_study(sampler=optuna.samplers.RandomSampler(seed=0))
+    trial = study.ask()
+    params = sample_twoda2c_params(trial, 4, 2, {})
+    assert 0.0 <= params["punishment_gamma"] <= 0.99
+    assert 0.0 <= params["punishment_gae_lambda"] <= 1.0
+    assert params["punishment_weight"] > 0 and params["punishment_vf_coef"] > 0
+    assert 0.8 <= params["gamma"] < 1.0
+    assert "net_arch" in params["policy_kwargs"]
+    # the converter maps a stored trial's params to the same constructor arguments (--trial-id)
+    assert convert_twoda2c_params(trial.params) == params
+
+
+def test_register_zoo_tables():
+    from rl_zoo3.hyperparams_opt import HYPERPARAMS_CONVERTER, HYPERPARAMS_SAMPLER
+    from rl_zoo3.utils import ALGOS as ZOO_ALGOS
+
+    class Stand(A2C):
+        pass
+
+    saved = ZOO_ALGOS.get(ALGO_KEY)
+    try:
+        assert register_zoo(Stand)
+        assert ZOO_ALGOS[ALGO_KEY] is Stand
+        assert HYPERPARAMS_SAMPLER[ALGO_KEY] is sample_twoda2c_params
+        assert HYPERPARAMS_CONVERTER[ALGO_KEY] is convert_twoda2c_params
+    finally:
+        if saved is None:
+            ZOO_ALGOS.pop(ALGO_KEY, None)
+        else:
+            ZOO_ALGOS[ALGO_KEY] = saved
