@@ -125,5 +125,5 @@ def test_sb3_vec_env():
     venv = make_memorable_vec_env(3, seed=0)
     obs = venv.reset()
     assert obs.shape == (3, 34)
-    obs, rewards, dones, infos = venv.step(np.array([0, 1, 2]))
+    obs, _, _, infos = venv.step(np.array([0, 1, 2]))
     assert obs.shape == (3, 34) and len(infos) == 3 and "route" in infos[0]
