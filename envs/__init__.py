@@ -3,9 +3,10 @@
 Importing this package registers:
 
 * ``NomadOffice-v0``: the office of paper section 3 with ideal sensors and exact 10 cm moves;
-* ``NomadOfficeReal-v0``: the same office with sensor noise, sonar drop-outs and motion slip.
+* ``NomadOfficeReal-v0``: the same office with sensor noise, sonar drop-outs and motion slip;
+* ``NomadOfficeMemorable-v0``: the same task replayed from a recorded sensor database (MEMORABLE).
 
-Both are truncated after 200 steps: six times the shortest detour (33 moves), so no sensible
+All are truncated after 200 steps: six times the shortest detour (33 moves), so no sensible
 route is cut short, while 0.9**200 ~ 1e-9 makes the cut invisible to a gamma 0.9 learner.
 """
 
@@ -19,4 +20,9 @@ register(
     entry_point="envs.nomad.office:NomadOfficeEnv",
     max_episode_steps=MAX_EPISODE_STEPS,
     kwargs={"sensor_noise": True, "step_sd_cm": 1.0, "slip_sd_cm": 1.0},
+)
+register(
+    id="NomadOfficeMemorable-v0",
+    entry_point="envs.memorable.env:NomadOfficeMemorableEnv",
+    max_episode_steps=MAX_EPISODE_STEPS,
 )

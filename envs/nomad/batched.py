@@ -71,6 +71,7 @@ class BatchedNomadOffice(VectorEnv):
         table = np.concatenate([self.core.readings, odometry], axis=1)
         self._obs_table = np.ascontiguousarray(table[:, : self.single_observation_space.shape[0]])
         self._sd_table = None if self.noise is None else self.noise.sd(self.core.ranges)
+        self._moves = self.core.lattice.moves  # move outcomes; a replay subclass swaps in the recorded free space
         self._step_reward = np.array([-MOVE_PUNISHMENT, GOAL_REWARD - MOVE_PUNISHMENT, -COLLISION_PUNISHMENT])
         self._all = np.ones(self.num_envs, dtype=bool)
         self._all.flags.writeable = False
@@ -119,7 +120,7 @@ class BatchedNomadOffice(VectorEnv):
         actions = np.asarray(actions)
         if actions.shape != (self.num_envs,) or not np.all((actions >= 0) & (actions < 4)):
             raise ValueError(f"actions must be {self.num_envs} integers in 0..3, got {actions!r}")
-        nxt = self.core.lattice.moves[self._cell, actions.astype(np.intp)]
+        nxt = self._moves[self._cell, actions.astype(np.intp)]
         collided = nxt < 0
         self._cell = np.where(collided, self._cell, nxt)
         code = self.core.route_code[self._cell]

@@ -1,0 +1,1 @@
+"""MEMORABLE: training from a database of recorded sensor readings (paper section 3.1)."""

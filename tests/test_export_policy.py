@@ -1,0 +1,52 @@
+"""The exported TorchScript policy picks model.predict(..., deterministic=True)'s actions."""
+
+import json
+import subprocess
+import sys
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import torch as th
+from stable_baselines3 import A2C
+
+import envs  # noqa: F401
+from sb3_twodrl import TwoDimA2C
+from scripts.export_policy import export_policy, main
+
+
+@pytest.mark.parametrize("algo", [TwoDimA2C, A2C])
+def test_exported_actions_equal_deterministic_predict(tmp_path, algo):
+    th.manual_seed(0)
+    env = gym.make("envs:NomadOfficeMemorable-v0")
+    model = algo("MlpPolicy", env, n_steps=8, gamma=0.9, seed=0, device="cpu")
+    model.learn(64)  # a few updates, so the weights are not the initial ones
+    path = export_policy(model, tmp_path / "policy.pt")
+    extra = {"meta.json": ""}
+    loaded = th.jit.load(str(path), _extra_files=extra)
+    assert json.loads(extra["meta.json"])["algorithm"] == algo.__name__
+    rng = np.random.default_rng(0)
+    real = gym.make("envs:NomadOfficeReal-v0")
+    obs = [real.reset(seed=1)[0]]
+    for _ in range(60):
+        o, _, term, trunc, _ = real.step(int(rng.integers(4)))
+        obs.append(real.reset()[0] if term or trunc else o)
+    batch = np.concatenate([np.stack(obs), rng.random((200, 34), dtype=np.float32)])
+    expected, _ = model.predict(batch, deterministic=True)
+    got = loaded(th.as_tensor(batch)).numpy()
+    assert got.dtype == np.int64 and np.array_equal(got, expected)
+    assert int(loaded(th.as_tensor(batch[:1]))[0]) == int(model.predict(batch[0], deterministic=True)[0])
+
+
+def test_cli(tmp_path):
+    model = TwoDimA2C("MlpPolicy", gym.make("envs:NomadOfficeMemorable-v0"), seed=0, device="cpu")
+    model.save(tmp_path / "m.zip")
+    main([str(tmp_path / "m.zip"), str(tmp_path / "p.pt")])
+    # the robot side needs torch only: load and run with stable_baselines3 and sb3_twodrl blocked
+    code = (
+        "import sys; sys.modules['stable_baselines3'] = None; sys.modules['sb3_twodrl'] = None; "
+        f"import torch; p = torch.jit.load({str(tmp_path / 'p.pt')!r}); "
+        "print(int(p(torch.zeros(1, 34))[0]))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() in {"0", "1", "2", "3"}

@@ -1,0 +1,129 @@
+"""NomadOfficeMemorable-v0: replay env semantics, ideal K=1 equivalence, determinism, batched."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import envs  # noqa: F401  (registers the IDs)
+from envs.memorable.database import SensorDatabase, record_database
+from envs.memorable.env import BatchedNomadOfficeMemorable, NomadOfficeMemorableEnv, make_memorable_vec_env
+from envs.nomad.office import office_core
+
+
+@pytest.fixture(scope="module")
+def ideal_db():
+    return record_database(1)
+
+
+def _rollout(env, actions, seed):
+    obs, _ = env.reset(seed=seed)
+    out = [(obs, 0.0, False, False, None)]
+    for a in actions:
+        obs, r, term, trunc, info = env.step(a)
+        out.append((obs, r, term, trunc, info))
+        if term or trunc:
+            obs, _ = env.reset()
+            out.append((obs, 0.0, False, False, None))
+    return out
+
+
+def test_check_env_and_registration():
+    env = gym.make("envs:NomadOfficeMemorable-v0")
+    check_env(env.unwrapped, skip_render_check=True)
+    assert env.spec.max_episode_steps == 200
+    assert env.observation_space.shape == (34,)
+    check_env(NomadOfficeMemorableEnv(observe_odometry=False), skip_render_check=True)
+
+
+def test_ideal_k1_database_gives_exactly_the_ideal_observations(ideal_db):
+    rng = np.random.default_rng(0)
+    actions = rng.integers(0, 4, size=3000)
+    # bias eastwards so episodes go through the shortcut and sometimes reach the goal
+    actions[rng.random(3000) < 0.4] = 1
+    ideal = _rollout(gym.make("envs:NomadOffice-v0"), actions, seed=5)
+    replay = _rollout(gym.make("envs:NomadOfficeMemorable-v0", database=ideal_db), actions, seed=5)
+    assert len(ideal) == len(replay)
+    for (o1, r1, t1, u1, i1), (o2, r2, t2, u2, i2) in zip(ideal, replay, strict=True):
+        assert o1.dtype == o2.dtype and np.array_equal(o1, o2)
+        assert (r1, t1, u1) == (r2, t2, u2)
+        assert i1 == i2
+    infos = [step[4] for step in ideal if step[4] is not None]
+    assert any(i["collision"] for i in infos)
+
+
+def test_observations_are_recorded_readings_of_the_cell():
+    env = NomadOfficeMemorableEnv()
+    db = env.replay.database
+    core = env.core
+    obs, _ = env.reset(seed=1)
+    seen = set()
+    rng = np.random.default_rng(1)
+    for _ in range(300):
+        cell = env._cell
+        rows = env.replay.readings[db.offsets[cell] : db.offsets[cell] + db.counts[cell]]
+        match = np.flatnonzero((rows == obs[:32]).all(axis=1))
+        assert len(match) == 1
+        seen.add((cell, int(match[0])))
+        assert np.array_equal(obs[32:], core.odometry(core.lattice.cells[cell]))
+        obs, _, term, trunc, _ = env.step(int(rng.integers(4)))
+        if term or trunc:
+            obs, _ = env.reset()
+    cells_seen = {c for c, _ in seen}
+    assert len(seen) > len(cells_seen)  # different recordings of the same cell do turn up
+
+
+def test_seeded_determinism():
+    actions = np.random.default_rng(2).integers(0, 4, size=400)
+    a = _rollout(gym.make("envs:NomadOfficeMemorable-v0"), actions, seed=11)
+    b = _rollout(gym.make("envs:NomadOfficeMemorable-v0"), actions, seed=11)
+    c = _rollout(gym.make("envs:NomadOfficeMemorable-v0"), actions, seed=12)
+    assert all(np.array_equal(x[0], y[0]) and x[1:4] == y[1:4] for x, y in zip(a, b, strict=True))
+    assert any(not np.array_equal(x[0], y[0]) for x, y in zip(a, c, strict=False))
+
+
+def test_unrecorded_cells_are_obstacles(ideal_db):
+    core = office_core()
+    east = core.lattice.index((100.0, 60.0))
+    counts = ideal_db.counts.copy()
+    counts[east] = 0
+    keep = np.repeat(counts > 0, ideal_db.counts)
+    db = SensorDatabase(ideal_db.cells, counts, ideal_db.ranges_cm[keep], ideal_db.metadata)
+    env = NomadOfficeMemorableEnv(database=db)
+    env.reset(seed=0)
+    _, reward, term, _, info = env.step(1)  # east of the start: free on the map, never recorded
+    assert term and info["collision"] and reward == -1.0
+    env.reset(seed=0)
+    _, reward, term, _, info = env.step(0)  # north: recorded
+    assert not term and reward == pytest.approx(-0.01)
+    with pytest.raises(ValueError, match="not a recorded lattice cell"):
+        env.reset(options={"position": (100.0, 60.0)})
+
+
+def test_batched_matches_single_envs():
+    n, seed, steps = 4, 7, 300
+    batched = BatchedNomadOfficeMemorable(n)
+    singles = [gym.make("envs:NomadOfficeMemorable-v0") for _ in range(n)]
+    obs, _ = batched.reset(seed=seed)
+    single_obs = [env.reset(seed=seed + i)[0] for i, env in enumerate(singles)]
+    assert np.array_equal(obs, np.stack(single_obs))
+    rng = np.random.default_rng(3)
+    for _ in range(steps):
+        actions = rng.integers(0, 4, size=n)
+        obs, rewards, term, trunc, info = batched.step(actions)
+        for i, env in enumerate(singles):
+            o, r, t, u, inf = env.step(int(actions[i]))
+            assert (r, t, u) == (rewards[i], term[i], trunc[i])
+            assert inf["collision"] == info["collision"][i]
+            if t or u:
+                assert np.array_equal(o, info["final_obs"][i])
+                o, _ = env.reset()
+            assert np.array_equal(o, obs[i])
+
+
+def test_sb3_vec_env():
+    venv = make_memorable_vec_env(3, seed=0)
+    obs = venv.reset()
+    assert obs.shape == (3, 34)
+    obs, _, _, infos = venv.step(np.array([0, 1, 2]))
+    assert obs.shape == (3, 34) and len(infos) == 3 and "route" in infos[0]
