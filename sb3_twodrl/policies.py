@@ -61,7 +61,7 @@ class TwoDimActorCriticPolicy(ActorCriticPolicy):
         self,
         *args: Any,
         temperature: str | float = "interest",
-        min_temperature: float = 0.1,
+        min_temperature: float = 2.0,
         max_temperature: float = 10.0,
         **kwargs: Any,
     ):

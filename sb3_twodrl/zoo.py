@@ -15,12 +15,13 @@ Requires the ``zoo`` extra (rl-zoo3, optuna, pandas).
 from __future__ import annotations
 
 import importlib
-import inspect
 import os
 import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
+
+from sb3_twodrl.twodim_a2c import TwoDimA2C
 
 ALGO_KEY = "twoda2c"
 
@@ -32,14 +33,6 @@ __all__ = [
     "run_zoo_entry",
     "sample_twoda2c_params",
 ]
-
-
-def _twoda2c_class() -> type | None:
-    try:
-        from sb3_twodrl import TwoDimA2C  # type: ignore[attr-defined]
-    except ImportError:
-        return None
-    return TwoDimA2C
 
 
 def convert_twoda2c_params(sampled_params: dict[str, Any]) -> dict[str, Any]:
@@ -62,7 +55,7 @@ def sample_twoda2c_params(trial: Any, n_actions: int, n_envs: int, additional_ar
     - ``punishment_gamma`` in [0, 0.99]: the paper's point is that punishment is short-sighted (0.1);
     - ``one_minus_punishment_gae_lambda`` in [1e-4, 1] (log): punishment GAE lambda in [0, 0.9999];
     - ``punishment_vf_coef`` in [0.1, 1] and ``punishment_weight`` in [0.25, 4] (log);
-    - ``min_temperature`` in [1e-3, 0.5] (log), if TwoDimA2C takes it (the interest floor).
+    - ``min_temperature`` in [0.1, 10] (log): the interest floor.
     """
     n_steps = trial.suggest_categorical("n_steps", [5, 8, 16, 32, 64, 128, 256, 512])
     one_minus_gamma = trial.suggest_float("one_minus_gamma", 0.0001, 0.2, log=True)
@@ -93,27 +86,17 @@ def sample_twoda2c_params(trial: Any, n_actions: int, n_envs: int, additional_ar
         "punishment_vf_coef": punishment_vf_coef,
         "punishment_weight": punishment_weight,
     }
-    cls = _twoda2c_class()
-    if cls is not None and "min_temperature" in inspect.signature(cls.__init__).parameters:
-        sampled["min_temperature"] = trial.suggest_float("min_temperature", 1e-3, 0.5, log=True)
+    sampled["min_temperature"] = trial.suggest_float("min_temperature", 0.1, 10.0, log=True)
     return convert_twoda2c_params(sampled)
 
 
-def register_zoo(algo_class: type | None = None) -> bool:
-    """Register ``twoda2c`` in rl-zoo3's algorithm, sampler and converter tables (idempotent).
-
-    ``algo_class`` defaults to :class:`sb3_twodrl.TwoDimA2C`. Returns False (and registers nothing)
-    when that class is not available.
-    """
+def register_zoo() -> None:
+    """Register ``twoda2c`` in rl-zoo3's algorithm, sampler and converter tables (idempotent)."""
     from rl_zoo3 import hyperparams_opt, utils
 
-    cls = algo_class or _twoda2c_class()
-    if cls is None:
-        return False
-    utils.ALGOS[ALGO_KEY] = cls
+    utils.ALGOS[ALGO_KEY] = TwoDimA2C
     hyperparams_opt.HYPERPARAMS_SAMPLER[ALGO_KEY] = sample_twoda2c_params
     hyperparams_opt.HYPERPARAMS_CONVERTER[ALGO_KEY] = convert_twoda2c_params
-    return True
 
 
 def _has_option(argv: list[str], *names: str) -> bool:

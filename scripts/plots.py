@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from scipy import stats
 
 STYLE = {  # the paper: proposed method solid, conventional actor-critic dotted
     "twoda2c": {"label": "2D-RL (TwoDimA2C)", "linestyle": "-", "color": "tab:red"},
@@ -28,15 +29,10 @@ FIGURES = [
 
 
 def t_quantile(n: int) -> float:
-    """Two-sided 95% Student t quantile with n - 1 degrees of freedom (normal when scipy is absent)."""
+    """Two-sided 95% Student t quantile with n - 1 degrees of freedom."""
     if n < 2:
         return math.nan
-    try:
-        from scipy import stats
-
-        return float(stats.t.ppf(0.975, n - 1))
-    except ImportError:
-        return 1.96
+    return float(stats.t.ppf(0.975, n - 1))
 
 
 def mean_ci(values) -> tuple[float, float, int]:

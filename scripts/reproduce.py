@@ -417,12 +417,8 @@ def main(argv: list[str] | None = None) -> Path:
     m = args.test_episodes or preset["test_episodes"]
     seeds = args.seed_list if args.seed_list else list(range(args.seeds or preset["seeds"]))
     for package in args.gym_packages:
-        try:
-            importlib.import_module(package)
-        except ImportError:
-            if package != "envs":
-                raise
-    gym_packages = [p for p in args.gym_packages if importlib.util.find_spec(p) is not None]
+        importlib.import_module(package)
+    gym_packages = list(args.gym_packages)
     out = Path(args.out or ROOT / "runs" / "reproduce" / args.env)
 
     hyperparams = {a: load_hyperparams(a, args.env, Path(args.hyperparams_dir)) for a in args.algos}

@@ -16,12 +16,7 @@ sys.path.insert(0, str(ROOT / "scripts"))
 
 import reproduce  # noqa: E402
 
-try:
-    from sb3_twodrl import TwoDimA2C  # type: ignore[attr-defined]  # noqa: F401
-
-    ALGOS = ["twoda2c", "a2c"]
-except ImportError:  # the algorithm lives on another branch until merged
-    ALGOS = ["a2c"]
+ALGOS = ["twoda2c", "a2c"]
 
 ENV = "ToyNavRandom-v0"
 SEEDS = ["0", "1"]

@@ -7,30 +7,21 @@ import runpy
 import sys
 from pathlib import Path
 
-import gymnasium as gym
+import optuna
 import pytest
 import yaml
 
-pytest.importorskip("rl_zoo3")
-pytest.importorskip("optuna")
-
-import optuna
-from stable_baselines3 import A2C
-
+import envs  # noqa: F401  (registers the Nomad office ids)
 import tests.toy_nav  # noqa: F401  (registers ToyNav-v0)
+from sb3_twodrl import TwoDimA2C
 from sb3_twodrl.zoo import ALGO_KEY, convert_twoda2c_params, register_zoo, sample_twoda2c_params
 
 ROOT = Path(__file__).resolve().parents[1]
 HYPERPARAMS = ROOT / "scripts" / "hyperparams"
 ZOO_ENVS = ["NomadOffice-v0", "NomadOfficeMemorable-v0", "CartPole-v1", "Acrobot-v1"]
 
-try:
-    from sb3_twodrl import TwoDimA2C  # type: ignore[attr-defined]
-except ImportError:  # the algorithm lives on another branch until merged
-    TwoDimA2C = None
 
-needs_twoda2c = pytest.mark.skipif(TwoDimA2C is None, reason="sb3_twodrl.TwoDimA2C not available")
-ALGOS = ["a2c", pytest.param("twoda2c", marks=needs_twoda2c)]
+ALGOS = ["a2c", "twoda2c"]
 
 
 def run_script(name: str, argv: list[str], monkeypatch) -> None:
@@ -113,8 +104,6 @@ def test_train_tiny_budget_leaves_model_and_tensorboard(algo, tmp_path, monkeypa
 @pytest.mark.parametrize("env_id", ["CartPole-v1", "Acrobot-v1", "NomadOffice-v0"])
 @pytest.mark.parametrize("algo", ALGOS)
 def test_shipped_hyperparams_train(algo, env_id, tmp_path, monkeypatch):
-    if env_id not in gym.registry:
-        pytest.importorskip("envs.nomad")
     monkeypatch.chdir(tmp_path)
     argv = ["--algo", algo, "--env", env_id, "-n", "64", "--eval-freq", "-1"]
     argv += ["-f", "logs", "--seed", "1", "--device", "cpu"]
@@ -156,17 +145,7 @@ def test_register_zoo_tables():
     from rl_zoo3.hyperparams_opt import HYPERPARAMS_CONVERTER, HYPERPARAMS_SAMPLER
     from rl_zoo3.utils import ALGOS as ZOO_ALGOS
 
-    class Stand(A2C):
-        pass
-
-    saved = ZOO_ALGOS.get(ALGO_KEY)
-    try:
-        assert register_zoo(Stand)
-        assert ZOO_ALGOS[ALGO_KEY] is Stand
-        assert HYPERPARAMS_SAMPLER[ALGO_KEY] is sample_twoda2c_params
-        assert HYPERPARAMS_CONVERTER[ALGO_KEY] is convert_twoda2c_params
-    finally:
-        if saved is None:
-            ZOO_ALGOS.pop(ALGO_KEY, None)
-        else:
-            ZOO_ALGOS[ALGO_KEY] = saved
+    register_zoo()
+    assert ZOO_ALGOS[ALGO_KEY] is TwoDimA2C
+    assert HYPERPARAMS_SAMPLER[ALGO_KEY] is sample_twoda2c_params
+    assert HYPERPARAMS_CONVERTER[ALGO_KEY] is convert_twoda2c_params
