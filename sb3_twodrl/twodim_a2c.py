@@ -29,13 +29,13 @@ def _flat(values: th.Tensor) -> np.ndarray:
     return values.cpu().numpy().flatten()
 
 
-class _Transition(NamedTuple):
-    """The last vectorised step: observations before and after, and its (unbootstrapped) evaluations."""
+class _Step(NamedTuple):
+    """One vectorised step: its unbootstrapped evaluations and the critics' values of the state it left."""
 
-    obs: Any
-    next_obs: Any
     reward: np.ndarray
     punishment: np.ndarray
+    value: np.ndarray
+    punishment_value: np.ndarray
 
 
 def _check_unit_interval(name: str, value: float) -> None:
@@ -132,7 +132,7 @@ class TwoDimA2C(A2C):
             _check_non_negative(name, getattr(self, name))
         policy_kwargs = dict(policy_kwargs or {})
         policy_kwargs.update(temperature=temperature, min_temperature=min_temperature, max_temperature=max_temperature)
-        self._last_transition: _Transition | None = None
+        self._carried_interest: tuple[Any, np.ndarray] | None = None
         super().__init__(
             policy,
             env,
@@ -173,32 +173,27 @@ class TwoDimA2C(A2C):
         super()._setup_model()
 
     def _excluded_save_params(self) -> list[str]:
-        return [*super()._excluded_save_params(), "_last_transition", "_reward_split"]
+        return [*super()._excluded_save_params(), "_carried_interest", "_reward_split"]
 
-    def _values_before_last_transition(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """Current critics' ``V_R``, ``V_P`` of the state each env left by its last transition.
-
-        None when there is no transition into the current observation (first rollout, or the
-        envs were reset or replaced since).
-        """
-        transition = self._last_transition
-        if transition is None or transition.next_obs is not self._last_obs:
-            return None
-        values, punishment_values = self.policy.predict_critics(obs_as_tensor(transition.obs, self.device))
-        return _flat(values), _flat(punishment_values)
-
-    def _interest(
-        self, previous: tuple[np.ndarray, np.ndarray] | None, values: np.ndarray, punishment_values: np.ndarray
-    ) -> np.ndarray:
+    def _interest(self, last_step: _Step, values: np.ndarray, punishment_values: np.ndarray) -> np.ndarray:
         """Interest ``|delta_R| + |delta_P|`` (eq. 2, 7, 8) of the transition into each env's current state.
 
-        An env whose current state starts an episode (or that has no known transition) has interest 0.
+        An env whose current state starts an episode has interest 0.
         """
-        if previous is None or self._last_transition is None:
-            return np.zeros(len(values), dtype=np.float32)
-        delta_r = self._last_transition.reward + self.gamma * values - previous[0]
-        delta_p = self._last_transition.punishment + self.punishment_gamma * punishment_values - previous[1]
+        delta_r = last_step.reward + self.gamma * values - last_step.value
+        delta_p = last_step.punishment + self.punishment_gamma * punishment_values - last_step.punishment_value
         return (np.abs(delta_r) + np.abs(delta_p)) * (1.0 - self._last_episode_starts)
+
+    def _interest_at_rollout_start(self) -> np.ndarray:
+        """Interest carried over from the previous rollout's last transition, if it led into ``_last_obs``.
+
+        That transition was valued at the end of the previous rollout, by the critics of that time
+        at both ends; after a reset or a new env there is no such transition (interest 0).
+        """
+        carried = self._carried_interest
+        if carried is None or carried[0] is not self._last_obs:
+            return np.zeros(self.n_envs, dtype=np.float32)
+        return carried[1]
 
     def collect_rollouts(
         self,
@@ -213,16 +208,17 @@ class TwoDimA2C(A2C):
         n_steps = 0
         rollout_buffer.reset()
         callback.on_rollout_start()
-        use_interest = self.policy.temperature == "interest"
-        with th.no_grad():
-            previous = self._values_before_last_transition() if use_interest else None
+        last_step: _Step | None = None
 
         while n_steps < n_rollout_steps:
             with th.no_grad():
                 obs_tensor = obs_as_tensor(self._last_obs, self.device)  # type: ignore[arg-type]
                 latent_pi, values, punishment_values = self.policy.evaluate_state(obs_tensor)
                 step_values = _flat(values), _flat(punishment_values)
-                interest = self._interest(previous, *step_values)
+                if last_step is None:
+                    interest = self._interest_at_rollout_start()
+                else:
+                    interest = self._interest(last_step, *step_values)
                 inverse_temperature = self.policy.inverse_temperature(interest)
                 distribution = self.policy.tempered_distribution(latent_pi, inverse_temperature)
                 actions = distribution.get_actions()
@@ -250,8 +246,7 @@ class TwoDimA2C(A2C):
                 actions = actions.reshape(-1, 1)
 
             rewards, punishments = split_rewards(self._reward_split, rewards, infos, self.num_timesteps)
-            self._last_transition = _Transition(self._last_obs, new_obs, rewards.copy(), punishments.copy())
-            previous = step_values if use_interest else None
+            last_step = _Step(rewards.copy(), punishments.copy(), *step_values)
             # Bootstrap both critics on time-limit truncation, as SB3 does (GitHub issue #633)
             for idx, done in enumerate(dones):
                 if (
@@ -284,6 +279,7 @@ class TwoDimA2C(A2C):
         rollout_buffer.compute_returns_and_advantage(
             last_values=values, dones=dones, last_punishment_values=punishment_values
         )
+        self._carried_interest = (new_obs, rollout_buffer.interests[-1] * (1.0 - dones))
         self.policy.update_running_interest(float(rollout_buffer.interests.mean()))
 
         callback.update_locals(locals())
