@@ -120,8 +120,8 @@ class TwoDimA2C(A2C):
         self.punishment_gae_lambda = gae_lambda if punishment_gae_lambda is None else punishment_gae_lambda
         self.punishment_vf_coef = vf_coef if punishment_vf_coef is None else punishment_vf_coef
         self.punishment_weight = punishment_weight
+        make_reward_split(reward_split)  # validates
         self.reward_split = reward_split
-        self._reward_split = make_reward_split(reward_split)
         for name in ("gamma", "gae_lambda"):
             _check_unit_interval(name, locals()[name])
         for name in ("punishment_gamma", "punishment_gae_lambda"):
@@ -173,7 +173,7 @@ class TwoDimA2C(A2C):
         super()._setup_model()
 
     def _excluded_save_params(self) -> list[str]:
-        return [*super()._excluded_save_params(), "_carried_interest", "_reward_split"]
+        return [*super()._excluded_save_params(), "_carried_interest"]
 
     def _interest(self, last_step: _Step, values: np.ndarray, punishment_values: np.ndarray) -> np.ndarray:
         """Interest ``|delta_R| + |delta_P|`` (eq. 2, 7, 8) of the transition into each env's current state.
@@ -208,6 +208,7 @@ class TwoDimA2C(A2C):
         n_steps = 0
         rollout_buffer.reset()
         callback.on_rollout_start()
+        reward_split = make_reward_split(self.reward_split)
         last_step: _Step | None = None
 
         while n_steps < n_rollout_steps:
@@ -245,7 +246,7 @@ class TwoDimA2C(A2C):
             if isinstance(self.action_space, spaces.Discrete):
                 actions = actions.reshape(-1, 1)
 
-            rewards, punishments = split_rewards(self._reward_split, rewards, infos, self.num_timesteps)
+            rewards, punishments = split_rewards(reward_split, rewards, infos, self.num_timesteps)
             last_step = _Step(rewards.copy(), punishments.copy(), *step_values)
             # Bootstrap both critics on time-limit truncation, as SB3 does (GitHub issue #633)
             for idx, done in enumerate(dones):

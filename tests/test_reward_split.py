@@ -1,5 +1,6 @@
 """Each ``reward_split`` mode turns (reward, info) into the right (r_R, r_P), and bad feedback is caught."""
 
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -51,6 +52,13 @@ def test_bad_punishment_is_an_error_at_its_step(punishment: float) -> None:
     model = TwoDimA2C("MlpPolicy", ScriptedFeedbackEnv(feedback), n_steps=4, seed=0)
     with pytest.raises(ValueError, match="at timestep 7"):
         model.learn(8)
+
+
+def test_split_survives_save_and_load(tmp_path: Path) -> None:
+    env = ScriptedFeedbackEnv(FEEDBACK["info"])
+    TwoDimA2C("MlpPolicy", env, n_steps=4, reward_split="sign", seed=0).learn(4).save(tmp_path / "model.zip")
+    loaded = TwoDimA2C.load(tmp_path / "model.zip", env=env).learn(4)
+    np.testing.assert_allclose(loaded.rollout_buffer.punishments[:, 0], [0.0, 1.0, 0.0, 1.0], atol=1e-6)
 
 
 def test_unknown_mode_is_rejected() -> None:
