@@ -61,7 +61,7 @@ class TwoDimActorCriticPolicy(ActorCriticPolicy):
         self,
         *args: Any,
         temperature: str | float = "interest",
-        min_temperature: float = 2.0,
+        min_temperature: float = 0.5,
         max_temperature: float = 10.0,
         **kwargs: Any,
     ):

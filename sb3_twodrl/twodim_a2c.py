@@ -112,7 +112,7 @@ class TwoDimA2C(A2C):
         punishment_weight: float = 1.0,
         reward_split: str | RewardSplit = "auto",
         temperature: str | float = "interest",
-        min_temperature: float = 2.0,
+        min_temperature: float = 0.5,
         max_temperature: float = 10.0,
         _init_setup_model: bool = True,
     ):
