@@ -116,6 +116,26 @@ def test_dict_observations_and_multidiscrete_actions() -> None:
     assert values.shape == (1, 1)
 
 
+class ImageBitsEnv(gym.Env):
+    """Image observations and MultiBinary actions; reward +1 per set bit."""
+
+    observation_space = gym.spaces.Box(0, 255, (36, 36, 1), dtype=np.uint8)
+    action_space = gym.spaces.MultiBinary(3)
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
+        super().reset(seed=seed)
+        return self.observation_space.sample(), {}
+
+    def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
+        return self.observation_space.sample(), float(np.sum(action)), False, False, {}
+
+
+def test_image_observations_and_multibinary_actions() -> None:
+    model = TwoDimA2C("CnnPolicy", ImageBitsEnv(), n_steps=4, seed=0).learn(16)
+    action, _ = model.predict(ImageBitsEnv().observation_space.sample(), deterministic=False)
+    assert model.action_space.contains(action.astype(np.int8))
+
+
 @pytest.mark.skipif(not th.cuda.is_available(), reason="no CUDA device")
 def test_cuda_device() -> None:
     model = TwoDimA2C("MlpPolicy", "CartPole-v1", device="cuda", seed=0).learn(50)
