@@ -41,10 +41,10 @@ class TwoDimActorCriticPolicy(ActorCriticPolicy):
     Actor, reward critic ``V_R`` (SB3's value head) and punishment critic ``V_P`` (eq. 3-8).
 
     ``V_P`` is a second linear head on SB3's critic network, beside ``V_R``'s: the two critics
-    share the critic's hidden layers (not the actor's) and have their own loss weights. A
-    separate hidden network for ``V_P`` cost about 15% of training throughput for no gain we
-    could measure (README, "Design notes"). The head is initialised without touching the global
-    RNG, so that a seeded run draws the same random numbers as stock A2C.
+    share the critic's hidden layers (not the actor's) and have their own loss weights (a
+    separate network would cost a whole MLP pass per step; README, "Design notes"). The head is
+    initialised without touching the global RNG, so that a seeded run draws the same random
+    numbers as stock A2C.
 
     ``predict_values`` keeps SB3's meaning (``V_R``). ``evaluate_actions`` and ``forward`` use the
     raw preferences (``T = 1``); rollout collection and ``predict`` sample from the tempered
