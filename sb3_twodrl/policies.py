@@ -151,9 +151,8 @@ class TwoDimActorCriticPolicy(ActorCriticPolicy):
         return self.mlp_extractor.forward_actor(BaseModel.extract_features(self, obs, self.pi_features_extractor))
 
     def _running_distribution(self, latent_pi: th.Tensor) -> Distribution:
-        return self.tempered_distribution(
-            latent_pi, self.inverse_temperature(self.running_interest.expand(len(latent_pi)))
-        )
+        interest = np.full(len(latent_pi), self.running_interest.item(), dtype=np.float32)
+        return self.tempered_distribution(latent_pi, self.inverse_temperature(interest))
 
     def get_distribution(self, obs: PyTorchObs) -> Distribution:
         """Tempered action distribution (eq. 9) at the running interest estimate."""
