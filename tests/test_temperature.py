@@ -89,3 +89,14 @@ def test_default_run_does_not_freeze() -> None:
         outcomes.append("goal" if info["is_success"] else "time limit" if truncated else "collision")
     assert outcomes.count("time limit") == 0
     assert outcomes.count("goal") >= 20
+
+
+def test_stochastic_predict_uses_the_running_interest(biased_model: TwoDimA2C) -> None:
+    obs = np.zeros((2_000, *biased_model.observation_space.shape), dtype=np.float32)
+    biased_model.policy.running_interest.fill_(0.0)
+    calm_start = np.bincount(biased_model.predict(obs, deterministic=False)[0], minlength=4) / len(obs)
+    biased_model.policy.running_interest.fill_(biased_model.policy.min_temperature)
+    settled = np.bincount(biased_model.predict(obs, deterministic=False)[0], minlength=4) / len(obs)
+    np.testing.assert_allclose(calm_start, 0.25, atol=0.04)
+    assert settled.argmax() == 2 and settled[2] > 0.5
+    assert (biased_model.predict(obs, deterministic=True)[0] == 2).all()
