@@ -101,13 +101,13 @@ class TwoDimBufferMixin:
         self,
         *args: Any,
         punishment: np.ndarray,
-        punishment_value: th.Tensor,
+        punishment_value: np.ndarray,
         inverse_temperature: np.ndarray,
         **kwargs: Any,
     ) -> None:
         """SB3's ``add`` plus ``r_P``, ``V_P(s)`` and the inverse temperature the action was drawn with."""
         self.punishments[self.pos] = punishment
-        self.punishment_values[self.pos] = punishment_value.cpu().numpy().flatten()
+        self.punishment_values[self.pos] = punishment_value
         self.inverse_temperatures[self.pos] = inverse_temperature
         super().add(*args, **kwargs)  # type: ignore[misc]
 

@@ -269,7 +269,7 @@ class TwoDimA2C(A2C):
                 values,
                 log_probs,
                 punishment=punishments,
-                punishment_value=punishment_values,
+                punishment_value=step_values[1],
                 inverse_temperature=inverse_temperature,
             )
             self._last_obs = new_obs  # type: ignore[assignment]
