@@ -33,13 +33,16 @@ class OfficeMap:
 
     def inside_bounds(self, xy: np.ndarray) -> np.ndarray:
         """True where a point ``(..., 2)`` lies inside the map's bounding box."""
-        x0, y0, x1, y1 = self.bounds
-        return (xy[..., 0] >= x0) & (xy[..., 0] <= x1) & (xy[..., 1] >= y0) & (xy[..., 1] <= y1)
+        return _in_rect(self.bounds, xy)
 
     def in_region(self, name: str, xy: np.ndarray) -> np.ndarray:
         """True where a point ``(..., 2)`` lies in the named rectangle."""
-        x0, y0, x1, y1 = self.regions[name]
-        return (xy[..., 0] >= x0) & (xy[..., 0] <= x1) & (xy[..., 1] >= y0) & (xy[..., 1] <= y1)
+        return _in_rect(self.regions[name], xy)
+
+
+def _in_rect(rect: tuple[float, float, float, float], xy: np.ndarray) -> np.ndarray:
+    x0, y0, x1, y1 = rect
+    return (xy[..., 0] >= x0) & (xy[..., 0] <= x1) & (xy[..., 1] >= y0) & (xy[..., 1] <= y1)
 
 
 def default_map_path() -> Path:
@@ -115,8 +118,13 @@ def point_segment_distance(points: np.ndarray, walls: np.ndarray) -> np.ndarray:
     """Distances ``(..., m)`` from points ``(..., 2)`` to wall segments ``(m, 4)``."""
     a, d = walls[:, :2], walls[:, 2:] - walls[:, :2]
     rel = points[..., None, :] - a
-    t = np.clip(np.einsum("...mk,mk->...m", rel, d) / np.einsum("mk,mk->m", d, d), 0.0, 1.0)
+    t = _nearest_param(rel, d)
     return np.linalg.norm(rel - t[..., None] * d, axis=-1)
+
+
+def _nearest_param(rel: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """``t`` in [0, 1] of the point ``a + t * d`` of each segment nearest to ``a + rel``."""
+    return np.clip(np.einsum("...mk,mk->...m", rel, d) / np.einsum("mk,mk->m", d, d), 0.0, 1.0)
 
 
 def clearance(points: np.ndarray, walls: np.ndarray) -> np.ndarray:
@@ -183,7 +191,7 @@ def cone_ranges(origins: np.ndarray, bearings: np.ndarray, half_angle: float, wa
     cos_half = np.cos(half_angle)
     a, d = walls[:, :2], walls[:, 2:] - walls[:, :2]
     rel = origins[..., None, :] - a
-    t = np.clip(np.einsum("...mk,mk->...m", rel, d) / np.einsum("mk,mk->m", d, d), 0.0, 1.0)
+    t = _nearest_param(rel, d)
     for point in (a + t[..., None] * d, np.broadcast_to(a, rel.shape), np.broadcast_to(walls[:, 2:], rel.shape)):
         vec = point - origins[..., None, :]
         dist = np.linalg.norm(vec, axis=-1)
