@@ -226,7 +226,8 @@ class Lattice:
         return int(self.grid[ix, iy])
 
 
-MOVES_CM = np.array([[0.0, STEP_CM], [STEP_CM, 0.0], [0.0, -STEP_CM], [-STEP_CM, 0.0]])
+DIRECTIONS = ((0, 1), (1, 0), (0, -1), (-1, 0))  # lattice steps of actions N, E, S, W
+MOVES_CM = STEP_CM * np.array(DIRECTIONS, dtype=np.float64)
 
 
 def build_lattice(office: OfficeMap) -> Lattice:
@@ -244,10 +245,8 @@ def build_lattice(office: OfficeMap) -> Lattice:
     origin = (float(xs[0]), float(ys[0]))
     n = len(cells)
     moves = np.full((n, 4), -1, dtype=np.int64)
-    ij = np.argwhere(grid >= 0)
-    order = grid[ij[:, 0], ij[:, 1]]
-    ij = ij[np.argsort(order)]
-    for action, (dx, dy) in enumerate(((0, 1), (1, 0), (0, -1), (-1, 0))):
+    ij = np.argwhere(grid >= 0)  # row-major, as the cell indices were assigned: row k is cell k
+    for action, (dx, dy) in enumerate(DIRECTIONS):
         ti, tj = ij[:, 0] + dx, ij[:, 1] + dy
         ok = (ti >= 0) & (ti < grid.shape[0]) & (tj >= 0) & (tj < grid.shape[1])
         target = np.full(n, -1)
