@@ -49,10 +49,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a checkout without installing
-sys.path.insert(1, str(Path(__file__).resolve().parent))  # plots.py
-
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # run from a checkout without installing
+sys.path.insert(1, str(ROOT / "scripts"))  # plots.py
 HYPERPARAMS_DIR = ROOT / "scripts" / "hyperparams"
 COLUMNS = [
     "env",
@@ -74,7 +73,6 @@ PRESETS: dict[str, dict[str, int]] = {
     "quick": {"epochs": 20, "learn_episodes": 150, "test_episodes": 50, "seeds": 3},
     "paper": {"epochs": 1000, "learn_episodes": 1000, "test_episodes": 100, "seeds": 5},
 }
-ALGO_LABELS = {"twoda2c": "2D-RL (TwoDimA2C)", "a2c": "actor-critic (A2C)"}
 
 
 @dataclass
@@ -299,15 +297,6 @@ def check_config(out: Path, config: dict[str, Any]) -> None:
             raise SystemExit(f"{out} holds a run with other settings ({', '.join(diff)}); use another --out")
     out.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(config, indent=2, sort_keys=True))
-
-
-def _progress_count(specs: list[RunSpec]) -> int:
-    total = 0
-    for s in specs:
-        if s.progress_file and os.path.exists(s.progress_file):
-            with open(s.progress_file) as f:
-                total += sum(1 for _ in f)
-    return total
 
 
 def run_grid(
