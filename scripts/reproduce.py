@@ -287,10 +287,14 @@ def collect_results(out: Path):
 
 
 def check_config(out: Path, config: dict[str, Any]) -> None:
-    """A resumed run must use the protocol of the first one (seeds and algos may be added)."""
+    """A resumed run must use the protocol of the first one (seeds and algos may be added).
+
+    The algos of an earlier invocation stay part of the config that is written back.
+    """
     path = out / "config.json"
     if path.exists():
         old = json.loads(path.read_text())
+        config = {**config, "hyperparams": {**old.get("hyperparams", {}), **config["hyperparams"]}}
         keys = ("env_id", "epochs", "learn_episodes", "test_episodes", "hyperparams")
         diff = [k for k in keys if old.get(k) != config.get(k)]
         if diff:
@@ -421,10 +425,6 @@ def main(argv: list[str] | None = None) -> Path:
         "test_episodes": m,
         "hyperparams": {a: {key: repr(v) for key, v in hp.items()} for a, hp in hyperparams.items()},
     }
-    old_hp = {}
-    if (out / "config.json").exists():  # algos of an earlier invocation stay part of the config
-        old_hp = json.loads((out / "config.json").read_text()).get("hyperparams", {})
-        config["hyperparams"] = {**old_hp, **config["hyperparams"]}
     check_config(out, config)
 
     specs = [
