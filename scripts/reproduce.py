@@ -53,20 +53,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # run from a checkout without installing
 sys.path.insert(1, str(ROOT / "scripts"))  # plots.py
 HYPERPARAMS_DIR = ROOT / "scripts" / "hyperparams"
-COLUMNS = [
-    "env",
-    "algo",
-    "seed",
-    "epoch",
-    "learn_episodes",
-    "goal_rate",
-    "reward_per_step",
-    "shortcut_share",
-    "detour_share",
-    "collision_rate",
-    "env_steps",
-    "wall_s",
-]
+METRICS = ("goal_rate", "reward_per_step", "shortcut_share", "detour_share", "collision_rate")
+COLUMNS = ["env", "algo", "seed", "epoch", "learn_episodes", *METRICS, "env_steps", "wall_s"]
 PRESETS: dict[str, dict[str, int]] = {
     # epochs, learning episodes per epoch (K), test episodes per epoch (M), seeds (S)
     "tiny": {"epochs": 3, "learn_episodes": 8, "test_episodes": 4, "seeds": 2},
@@ -225,16 +213,12 @@ def run_pair(spec: RunSpec) -> list[dict[str, Any]]:
                     "seed": spec.seed,
                     "epoch": self.epoch,
                     "learn_episodes": self.epoch * spec.learn_episodes,
-                    "goal_rate": metrics.get("goal_rate", math.nan),
-                    "reward_per_step": metrics["reward_per_step"],
-                    "shortcut_share": metrics.get("shortcut_share", math.nan),
-                    "detour_share": metrics.get("detour_share", math.nan),
-                    "collision_rate": metrics.get("collision_rate", math.nan),
+                    **{key: metrics.get(key, math.nan) for key in METRICS},
                     "env_steps": int(self.num_timesteps),
                     "wall_s": round(time.perf_counter() - start, 3),
                 }
                 rows.append(row)
-                for key in ("goal_rate", "reward_per_step", "shortcut_share", "detour_share", "collision_rate"):
+                for key in METRICS:
                     self.logger.record(f"test/{key}", row[key])
                 self.logger.record("test/epoch", self.epoch)
                 self.logger.dump(self.num_timesteps)
