@@ -49,32 +49,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a checkout without installing
-sys.path.insert(1, str(Path(__file__).resolve().parent))  # plots.py
-
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # run from a checkout without installing
+sys.path.insert(1, str(ROOT / "scripts"))  # plots.py
 HYPERPARAMS_DIR = ROOT / "scripts" / "hyperparams"
-COLUMNS = [
-    "env",
-    "algo",
-    "seed",
-    "epoch",
-    "learn_episodes",
-    "goal_rate",
-    "reward_per_step",
-    "shortcut_share",
-    "detour_share",
-    "collision_rate",
-    "env_steps",
-    "wall_s",
-]
+METRICS = ("goal_rate", "reward_per_step", "shortcut_share", "detour_share", "collision_rate")
+COLUMNS = ["env", "algo", "seed", "epoch", "learn_episodes", *METRICS, "env_steps", "wall_s"]
 PRESETS: dict[str, dict[str, int]] = {
     # epochs, learning episodes per epoch (K), test episodes per epoch (M), seeds (S)
     "tiny": {"epochs": 3, "learn_episodes": 8, "test_episodes": 4, "seeds": 2},
     "quick": {"epochs": 20, "learn_episodes": 150, "test_episodes": 50, "seeds": 3},
     "paper": {"epochs": 1000, "learn_episodes": 1000, "test_episodes": 100, "seeds": 5},
 }
-ALGO_LABELS = {"twoda2c": "2D-RL (TwoDimA2C)", "a2c": "actor-critic (A2C)"}
 
 
 @dataclass
@@ -227,16 +213,12 @@ def run_pair(spec: RunSpec) -> list[dict[str, Any]]:
                     "seed": spec.seed,
                     "epoch": self.epoch,
                     "learn_episodes": self.epoch * spec.learn_episodes,
-                    "goal_rate": metrics.get("goal_rate", math.nan),
-                    "reward_per_step": metrics["reward_per_step"],
-                    "shortcut_share": metrics.get("shortcut_share", math.nan),
-                    "detour_share": metrics.get("detour_share", math.nan),
-                    "collision_rate": metrics.get("collision_rate", math.nan),
+                    **{key: metrics.get(key, math.nan) for key in METRICS},
                     "env_steps": int(self.num_timesteps),
                     "wall_s": round(time.perf_counter() - start, 3),
                 }
                 rows.append(row)
-                for key in ("goal_rate", "reward_per_step", "shortcut_share", "detour_share", "collision_rate"):
+                for key in METRICS:
                     self.logger.record(f"test/{key}", row[key])
                 self.logger.record("test/epoch", self.epoch)
                 self.logger.dump(self.num_timesteps)
@@ -289,25 +271,20 @@ def collect_results(out: Path):
 
 
 def check_config(out: Path, config: dict[str, Any]) -> None:
-    """A resumed run must use the protocol of the first one (seeds and algos may be added)."""
+    """A resumed run must use the protocol of the first one (seeds and algos may be added).
+
+    The algos of an earlier invocation stay part of the config that is written back.
+    """
     path = out / "config.json"
     if path.exists():
         old = json.loads(path.read_text())
+        config = {**config, "hyperparams": {**old.get("hyperparams", {}), **config["hyperparams"]}}
         keys = ("env_id", "epochs", "learn_episodes", "test_episodes", "hyperparams")
         diff = [k for k in keys if old.get(k) != config.get(k)]
         if diff:
             raise SystemExit(f"{out} holds a run with other settings ({', '.join(diff)}); use another --out")
     out.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(config, indent=2, sort_keys=True))
-
-
-def _progress_count(specs: list[RunSpec]) -> int:
-    total = 0
-    for s in specs:
-        if s.progress_file and os.path.exists(s.progress_file):
-            with open(s.progress_file) as f:
-                total += sum(1 for _ in f)
-    return total
 
 
 def run_grid(
@@ -432,10 +409,6 @@ def main(argv: list[str] | None = None) -> Path:
         "test_episodes": m,
         "hyperparams": {a: {key: repr(v) for key, v in hp.items()} for a, hp in hyperparams.items()},
     }
-    old_hp = {}
-    if (out / "config.json").exists():  # algos of an earlier invocation stay part of the config
-        old_hp = json.loads((out / "config.json").read_text()).get("hyperparams", {})
-        config["hyperparams"] = {**old_hp, **config["hyperparams"]}
     check_config(out, config)
 
     specs = [

@@ -1,7 +1,6 @@
 """Long learning checks (``pytest -m slow``)."""
 
 import pytest
-import torch as th
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.evaluation import evaluate_policy
 
@@ -10,7 +9,6 @@ from sb3_twodrl import TwoDimA2C
 
 @pytest.mark.slow
 def test_solves_cartpole_within_100k_steps_for_two_of_three_seeds() -> None:
-    th.set_num_threads(1)
     solved = []
     for seed in range(3):
         model = TwoDimA2C("MlpPolicy", make_vec_env("CartPole-v1", n_envs=8, seed=seed), seed=seed).learn(100_000)

@@ -9,6 +9,7 @@ import envs  # noqa: F401  (registers the IDs)
 from envs.memorable.database import SensorDatabase, record_database
 from envs.memorable.env import BatchedNomadOfficeMemorable, NomadOfficeMemorableEnv, make_memorable_vec_env
 from envs.nomad.office import office_core
+from tests.test_nomad_batched import assert_batched_equals_singles
 
 
 @pytest.fixture(scope="module")
@@ -104,21 +105,8 @@ def test_batched_matches_single_envs():
     n, seed, steps = 4, 7, 300
     batched = BatchedNomadOfficeMemorable(n)
     singles = [gym.make("envs:NomadOfficeMemorable-v0") for _ in range(n)]
-    obs, _ = batched.reset(seed=seed)
-    single_obs = [env.reset(seed=seed + i)[0] for i, env in enumerate(singles)]
-    assert np.array_equal(obs, np.stack(single_obs))
     rng = np.random.default_rng(3)
-    for _ in range(steps):
-        actions = rng.integers(0, 4, size=n)
-        obs, rewards, term, trunc, info = batched.step(actions)
-        for i, env in enumerate(singles):
-            o, r, t, u, inf = env.step(int(actions[i]))
-            assert (r, t, u) == (rewards[i], term[i], trunc[i])
-            assert inf["collision"] == info["collision"][i]
-            if t or u:
-                assert np.array_equal(o, info["final_obs"][i])
-                o, _ = env.reset()
-            assert np.array_equal(o, obs[i])
+    assert_batched_equals_singles(batched, singles, seed, (rng.integers(0, 4, size=n) for _ in range(steps)))
 
 
 def test_sb3_vec_env():

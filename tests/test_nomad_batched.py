@@ -11,31 +11,35 @@ from envs.nomad.batched import BatchedNomadOffice, make_sb3_vec_env
 N_ENVS, STEPS, SEED = 6, 150, 11
 
 
-@pytest.mark.parametrize(("sensor_noise", "odometry"), [(False, True), (True, True), (True, False)])
-def test_batched_equals_single_envs(sensor_noise, odometry):
-    kwargs = {"sensor_noise": sensor_noise, "observe_odometry": odometry, "max_episode_steps": 40}
-    batched = BatchedNomadOffice(N_ENVS, **kwargs)
-    singles = [gym.make("envs:NomadOffice-v0", **kwargs) for _ in range(N_ENVS)]
-    obs, _ = batched.reset(seed=SEED)
-    single_obs = [env.reset(seed=SEED + i)[0] for i, env in enumerate(singles)]
+def assert_batched_equals_singles(batched, singles, seed, actions) -> int:
+    """Reset sub-env ``i`` and ``singles[i]`` with ``seed + i``, step both through the rows of
+    ``actions`` and check every observation, reward, flag and info entry; returns the episodes ended."""
+    obs, _ = batched.reset(seed=seed)
+    single_obs = [env.reset(seed=seed + i)[0] for i, env in enumerate(singles)]
     np.testing.assert_array_equal(obs, np.stack(single_obs))
-    actions = np.random.default_rng(0).integers(4, size=(STEPS, N_ENVS))
     n_done = 0
-    for t in range(STEPS):
-        obs, rewards, terminated, truncated, info = batched.step(actions[t])
+    for row in actions:
+        obs, rewards, terminated, truncated, info = batched.step(row)
         for i, env in enumerate(singles):
-            o, r, te, tr, inf = env.step(actions[t, i])
+            o, r, te, tr, inf = env.step(int(row[i]))
             assert (r, te, tr) == (rewards[i], terminated[i], truncated[i])
-            assert (inf["route"], inf["is_success"], inf["punishment"]) == (
-                info["route"][i],
-                info["is_success"][i],
-                info["punishment"][i],
-            )
+            for key in ("route", "is_success", "punishment", "collision"):
+                assert inf[key] == info[key][i], key
             if te or tr:
                 n_done += 1
                 np.testing.assert_array_equal(o, info["final_obs"][i])
                 o, _ = env.reset()
             np.testing.assert_array_equal(o, obs[i])
+    return n_done
+
+
+@pytest.mark.parametrize(("sensor_noise", "odometry"), [(False, True), (True, True), (True, False)])
+def test_batched_equals_single_envs(sensor_noise, odometry):
+    kwargs = {"sensor_noise": sensor_noise, "observe_odometry": odometry, "max_episode_steps": 40}
+    batched = BatchedNomadOffice(N_ENVS, **kwargs)
+    singles = [gym.make("envs:NomadOffice-v0", **kwargs) for _ in range(N_ENVS)]
+    actions = np.random.default_rng(0).integers(4, size=(STEPS, N_ENVS))
+    n_done = assert_batched_equals_singles(batched, singles, SEED, actions)
     assert n_done > N_ENVS  # autoreset was exercised
 
 

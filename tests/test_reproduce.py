@@ -65,8 +65,8 @@ def test_resume_skips_finished_pairs_and_redoes_only_missing(process_run, capsys
     assert {p: p.stat().st_mtime_ns for p in pairs} == stamps
     pd.testing.assert_frame_equal(pd.read_csv(process_run / "results.csv"), before)
     # An interrupted grid: one pair missing. Only it runs again, and it gives the same rows (seeded).
-    missing = pair_path = process_run / "pairs" / f"a2c_seed{SEEDS[-1]}.csv"
-    missing.unlink()
+    pair_path = process_run / "pairs" / f"a2c_seed{SEEDS[-1]}.csv"
+    pair_path.unlink()
     reproduce.main([*COMMON, "--out", str(process_run), "--backend", "serial", "--no-plots"])
     assert all(p.stat().st_mtime_ns == stamps[p] for p in pairs if p != pair_path)
     pd.testing.assert_frame_equal(without_wall(pd.read_csv(process_run / "results.csv")), without_wall(before))

@@ -19,8 +19,6 @@ from sb3_twodrl.zoo import ALGO_KEY, convert_twoda2c_params, register_zoo, sampl
 ROOT = Path(__file__).resolve().parents[1]
 HYPERPARAMS = ROOT / "scripts" / "hyperparams"
 ZOO_ENVS = ["NomadOffice-v0", "NomadOfficeMemorable-v0", "CartPole-v1", "Acrobot-v1"]
-
-
 ALGOS = ["a2c", "twoda2c"]
 
 
@@ -57,7 +55,7 @@ def scalar_tags(tb_dir: Path) -> set[str]:
 
 
 def test_yaml_covers_the_envs_for_both_algorithms():
-    for algo in ("a2c", "twoda2c"):
+    for algo in ALGOS:
         conf = yaml.safe_load((HYPERPARAMS / f"{algo}.yml").read_text())
         for env_id in ZOO_ENVS:
             assert env_id in conf, (algo, env_id)

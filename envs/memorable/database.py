@@ -23,14 +23,13 @@ import numpy as np
 from envs.nomad import sensors
 from envs.nomad.geometry import ROBOT_RADIUS_CM, STEP_CM, OfficeMap
 from envs.nomad.office import OfficeCore, office_core
+from envs.nomad.sensors import HIGH_CM, LOW_CM
 
 SCHEMA_VERSION = 1
 FORMAT_NAME = "sb3-twodrl-memorable"
 _ARRAYS = ("format", "schema_version", "metadata", "cells", "counts", "ranges_cm")
 SENSOR_COLUMNS = tuple(f"sonar_{i}" for i in range(sensors.N_SONAR)) + tuple(f"ir_{i}" for i in range(sensors.N_IR))
 CSV_COLUMNS = ("x_cm", "y_cm", *SENSOR_COLUMNS)
-LOW_CM = np.concatenate([np.full(sensors.N_SONAR, sensors.SONAR_MIN_CM), np.zeros(sensors.N_IR)])
-HIGH_CM = np.concatenate([np.full(sensors.N_SONAR, sensors.SONAR_MAX_CM), np.full(sensors.N_IR, sensors.IR_MAX_CM)])
 
 
 def _xy(xy: Any) -> str:

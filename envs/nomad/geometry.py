@@ -33,13 +33,16 @@ class OfficeMap:
 
     def inside_bounds(self, xy: np.ndarray) -> np.ndarray:
         """True where a point ``(..., 2)`` lies inside the map's bounding box."""
-        x0, y0, x1, y1 = self.bounds
-        return (xy[..., 0] >= x0) & (xy[..., 0] <= x1) & (xy[..., 1] >= y0) & (xy[..., 1] <= y1)
+        return _in_rect(self.bounds, xy)
 
     def in_region(self, name: str, xy: np.ndarray) -> np.ndarray:
         """True where a point ``(..., 2)`` lies in the named rectangle."""
-        x0, y0, x1, y1 = self.regions[name]
-        return (xy[..., 0] >= x0) & (xy[..., 0] <= x1) & (xy[..., 1] >= y0) & (xy[..., 1] <= y1)
+        return _in_rect(self.regions[name], xy)
+
+
+def _in_rect(rect: tuple[float, float, float, float], xy: np.ndarray) -> np.ndarray:
+    x0, y0, x1, y1 = rect
+    return (xy[..., 0] >= x0) & (xy[..., 0] <= x1) & (xy[..., 1] >= y0) & (xy[..., 1] <= y1)
 
 
 def default_map_path() -> Path:
@@ -115,8 +118,13 @@ def point_segment_distance(points: np.ndarray, walls: np.ndarray) -> np.ndarray:
     """Distances ``(..., m)`` from points ``(..., 2)`` to wall segments ``(m, 4)``."""
     a, d = walls[:, :2], walls[:, 2:] - walls[:, :2]
     rel = points[..., None, :] - a
-    t = np.clip(np.einsum("...mk,mk->...m", rel, d) / np.einsum("mk,mk->m", d, d), 0.0, 1.0)
+    t = _nearest_param(rel, d)
     return np.linalg.norm(rel - t[..., None] * d, axis=-1)
+
+
+def _nearest_param(rel: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """``t`` in [0, 1] of the point ``a + t * d`` of each segment nearest to ``a + rel``."""
+    return np.clip(np.einsum("...mk,mk->...m", rel, d) / np.einsum("mk,mk->m", d, d), 0.0, 1.0)
 
 
 def clearance(points: np.ndarray, walls: np.ndarray) -> np.ndarray:
@@ -183,7 +191,7 @@ def cone_ranges(origins: np.ndarray, bearings: np.ndarray, half_angle: float, wa
     cos_half = np.cos(half_angle)
     a, d = walls[:, :2], walls[:, 2:] - walls[:, :2]
     rel = origins[..., None, :] - a
-    t = np.clip(np.einsum("...mk,mk->...m", rel, d) / np.einsum("mk,mk->m", d, d), 0.0, 1.0)
+    t = _nearest_param(rel, d)
     for point in (a + t[..., None] * d, np.broadcast_to(a, rel.shape), np.broadcast_to(walls[:, 2:], rel.shape)):
         vec = point - origins[..., None, :]
         dist = np.linalg.norm(vec, axis=-1)
@@ -218,7 +226,8 @@ class Lattice:
         return int(self.grid[ix, iy])
 
 
-MOVES_CM = np.array([[0.0, STEP_CM], [STEP_CM, 0.0], [0.0, -STEP_CM], [-STEP_CM, 0.0]])
+DIRECTIONS = ((0, 1), (1, 0), (0, -1), (-1, 0))  # lattice steps of actions N, E, S, W
+MOVES_CM = STEP_CM * np.array(DIRECTIONS, dtype=np.float64)
 
 
 def build_lattice(office: OfficeMap) -> Lattice:
@@ -236,10 +245,8 @@ def build_lattice(office: OfficeMap) -> Lattice:
     origin = (float(xs[0]), float(ys[0]))
     n = len(cells)
     moves = np.full((n, 4), -1, dtype=np.int64)
-    ij = np.argwhere(grid >= 0)
-    order = grid[ij[:, 0], ij[:, 1]]
-    ij = ij[np.argsort(order)]
-    for action, (dx, dy) in enumerate(((0, 1), (1, 0), (0, -1), (-1, 0))):
+    ij = np.argwhere(grid >= 0)  # row-major, as the cell indices were assigned: row k is cell k
+    for action, (dx, dy) in enumerate(DIRECTIONS):
         ti, tj = ij[:, 0] + dx, ij[:, 1] + dy
         ok = (ti >= 0) & (ti < grid.shape[0]) & (tj >= 0) & (tj < grid.shape[1])
         target = np.full(n, -1)

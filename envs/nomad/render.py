@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from envs.nomad import sensors
-from envs.nomad.geometry import ROBOT_RADIUS_CM, OfficeMap
+from envs.nomad.geometry import ROBOT_RADIUS_CM, OfficeMap, point_segment_distance
 
 _WHITE = (255, 255, 255)
 _REGION_COLOURS = {"shortcut": (255, 224, 178), "detour": (200, 225, 255), "goal": (190, 240, 190)}
@@ -39,11 +39,7 @@ class OfficeRenderer:
         return image
 
     def _segment(self, image: np.ndarray, a: np.ndarray, b: np.ndarray, colour: tuple, width_cm: float) -> None:
-        d = b - a
-        length2 = float(d @ d)
-        rel = self._xy - a
-        t = np.clip(rel @ d / length2, 0.0, 1.0) if length2 > 0 else np.zeros(self._xy.shape[:2])
-        image[np.linalg.norm(rel - t[..., None] * d, axis=-1) <= width_cm / 2] = colour
+        image[point_segment_distance(self._xy, np.concatenate([a, b])[None])[..., 0] <= width_cm / 2] = colour
 
     def _dots(self, image: np.ndarray, points: np.ndarray, colour: tuple) -> None:
         x0, _, _, y1 = self.office.bounds
@@ -58,7 +54,9 @@ class OfficeRenderer:
         image = self._background.copy()
         rel = self._xy - position
         dist = np.hypot(rel[..., 0], rel[..., 1])
-        sonar = np.clip(sensors.exact_ranges(self.office, np.asarray(position)[None])[0, : sensors.N_SONAR], 0, 600)
+        sonar = np.clip(
+            sensors.exact_ranges(self.office, np.asarray(position)[None])[0, : sensors.N_SONAR], 0, sensors.SONAR_MAX_CM
+        )
         ccw_from_north = np.arctan2(-rel[..., 0], rel[..., 1])
         index = np.round(ccw_from_north / np.deg2rad(22.5)).astype(int) % sensors.N_SONAR
         cone = (dist > ROBOT_RADIUS_CM) & (dist - ROBOT_RADIUS_CM <= sonar[index])

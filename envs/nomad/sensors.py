@@ -33,9 +33,16 @@ IR_MAX_CM = 40.0
 SONAR_HALF_ANGLE = np.deg2rad(22.5) / 2
 BEARINGS = -np.deg2rad(22.5) * np.arange(16)  # clockwise-from-north bearings of sensors 0..15
 _OFFSETS = ROBOT_RADIUS_CM * np.stack([np.sin(BEARINGS), np.cos(BEARINGS)], axis=1)
-SCALE = np.concatenate([np.full(N_SONAR, SONAR_MAX_CM - SONAR_MIN_CM), np.full(N_IR, IR_MAX_CM)])
-SHIFT = np.concatenate([np.full(N_SONAR, SONAR_MIN_CM), np.zeros(N_IR)])
-_INV_SCALE = 1.0 / SCALE
+
+
+def per_sensor(sonar: float, ir: float) -> np.ndarray:
+    """A ``(32,)`` array holding ``sonar`` for the 16 sonar and ``ir`` for the 16 IR readings."""
+    return np.concatenate([np.full(N_SONAR, sonar), np.full(N_IR, ir)])
+
+
+LOW_CM = per_sensor(SONAR_MIN_CM, 0.0)  # valid range of each reading, cm
+HIGH_CM = per_sensor(SONAR_MAX_CM, IR_MAX_CM)
+_INV_SCALE = 1.0 / (HIGH_CM - LOW_CM)
 
 
 def exact_ranges(office: OfficeMap, positions: np.ndarray) -> np.ndarray:
@@ -48,7 +55,7 @@ def exact_ranges(office: OfficeMap, positions: np.ndarray) -> np.ndarray:
 
 def normalise(ranges_cm: np.ndarray) -> np.ndarray:
     """Saturate ranges ``(..., 32)`` as the real sensors do and scale them to [0, 1] (float32)."""
-    scaled = (ranges_cm - SHIFT) * _INV_SCALE
+    scaled = (ranges_cm - LOW_CM) * _INV_SCALE
     return np.clip(scaled, 0.0, 1.0, out=scaled).astype(np.float32)
 
 
@@ -101,9 +108,8 @@ class NoiseModel:
 
     def sd(self, ranges_cm: np.ndarray) -> np.ndarray:
         """Noise standard deviation ``(..., 32)`` of exact ranges (cm)."""
-        frac = np.concatenate([np.full(N_SONAR, self.sonar_sd_frac), np.full(N_IR, self.ir_sd_frac)])
-        base = np.concatenate([np.full(N_SONAR, self.sonar_sd_cm), np.full(N_IR, self.ir_sd_cm)])
-        return base + frac * ranges_cm
+        frac = per_sensor(self.sonar_sd_frac, self.ir_sd_frac)
+        return per_sensor(self.sonar_sd_cm, self.ir_sd_cm) + frac * ranges_cm
 
     def apply(
         self, ranges_cm: np.ndarray, keys: np.ndarray, steps: np.ndarray, sd: np.ndarray | None = None
