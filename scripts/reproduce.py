@@ -278,11 +278,16 @@ def check_config(out: Path, config: dict[str, Any]) -> None:
     path = out / "config.json"
     if path.exists():
         old = json.loads(path.read_text())
-        config = {**config, "hyperparams": {**old.get("hyperparams", {}), **config["hyperparams"]}}
-        keys = ("env_id", "epochs", "learn_episodes", "test_episodes", "hyperparams")
-        diff = [k for k in keys if old.get(k) != config.get(k)]
+        old_hyperparams = old.get("hyperparams", {})
+        diff = [k for k in ("env_id", "epochs", "learn_episodes", "test_episodes") if old.get(k) != config.get(k)]
+        diff += [
+            f"hyperparams of {algo}"
+            for algo in sorted(old_hyperparams.keys() & config["hyperparams"].keys())
+            if old_hyperparams[algo] != config["hyperparams"][algo]
+        ]
         if diff:
             raise SystemExit(f"{out} holds a run with other settings ({', '.join(diff)}); use another --out")
+        config = {**config, "hyperparams": {**old_hyperparams, **config["hyperparams"]}}
     out.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(config, indent=2, sort_keys=True))
 

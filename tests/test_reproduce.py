@@ -77,6 +77,15 @@ def test_resume_refuses_other_protocol(process_run):
         reproduce.main([*COMMON, "--out", str(process_run), "--epochs", "5", "--no-plots"])
 
 
+def test_resume_accepts_an_added_algo(tmp_path):
+    base = ["--env", ENV, "--gym-packages", "tests.toy_nav", "--preset", "tiny", "--n-envs", "2", "--seed-list", "0"]
+    base += ["--no-progress", "--no-plots", "--backend", "serial", "--out", str(tmp_path)]
+    reproduce.main([*base, "--algos", "a2c"])
+    reproduce.main([*base, "--algos", *ALGOS])
+    assert sorted(pd.read_csv(tmp_path / "results.csv")["algo"].unique()) == sorted(ALGOS)
+    assert sorted(reproduce.json.loads((tmp_path / "config.json").read_text())["hyperparams"]) == sorted(ALGOS)
+
+
 def test_ray_backend_gives_the_process_rows(process_run, tmp_path):
     pytest.importorskip("ray")
     # Ray >= 2.x dropped local_mode; a local single-node Ray instance runs the same tasks instead.
