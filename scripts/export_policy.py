@@ -53,7 +53,7 @@ def export_policy(model: BaseAlgorithm, path: str | Path) -> Path:
         "algorithm": type(model).__name__,
         "observation_shape": list(policy.observation_space.shape),
         "actions": ["north", "east", "south", "west"][: int(policy.action_space.n)],
-        "input": "float32 (n, obs_dim): 16 sonar (r-40)/560, 16 IR r/40, then odometry x/330, y/245",
+        "input": "float32 (n, obs_dim): 16 sonar (r-40)/560, 16 IR r/40, then odometry scaled by the map bounds",
         "output": "int64 (n,) argmax action (= model.predict(obs, deterministic=True))",
     }
     path = Path(path)
