@@ -43,10 +43,9 @@ def split_auto(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np
         return split_info(rewards, infos)
     reward_r, reward_p = split_sign(rewards, infos)
     for idx, info in enumerate(infos):
-        if "punishment" in info:
-            reward_r[idx], reward_p[idx] = rewards[idx] + info["punishment"], info["punishment"]
-        elif "cost" in info:
-            reward_r[idx], reward_p[idx] = rewards[idx], info["cost"]
+        split = split_info if "punishment" in info else split_cost if "cost" in info else None
+        if split is not None:
+            (reward_r[idx],), (reward_p[idx],) = split(rewards[idx : idx + 1], [info])
     return reward_r, reward_p
 
 

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from sb3_twodrl import TwoDimA2C
+from sb3_twodrl.splitting import make_reward_split, split_rewards
 from tests.toy_envs import ScriptedFeedbackEnv
 
 FEEDBACK: dict[str, list[tuple[float, dict[str, Any]]]] = {
@@ -38,6 +39,13 @@ def test_named_modes(mode: str) -> None:
 @pytest.mark.parametrize("mode", ["info", "cost", "sign"])
 def test_auto_picks_the_mode_from_the_info_keys(mode: str) -> None:
     np.testing.assert_array_equal(rollout_streams(FEEDBACK[mode], "auto"), rollout_streams(FEEDBACK[mode], mode))
+
+
+def test_auto_decides_per_env() -> None:
+    infos = [{"punishment": 0.01}, {"cost": 0.5}, {}, {}]
+    reward_r, reward_p = split_rewards(make_reward_split("auto"), np.array([4.99, -1.0, 2.0, -3.0]), infos, 1)
+    np.testing.assert_allclose(reward_r, [5.0, -1.0, 2.0, 0.0], atol=1e-6)
+    np.testing.assert_allclose(reward_p, [0.01, 0.5, 0.0, 3.0], atol=1e-6)
 
 
 def test_callable_split() -> None:
