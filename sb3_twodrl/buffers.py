@@ -86,16 +86,23 @@ class TwoDimBufferMixin:
         self.punishment_gae_lambda = punishment_gae_lambda
         self.punishment_weight = punishment_weight
         super().__init__(*args, **kwargs)
+        discounts = ((self.gamma, self.gae_lambda), (punishment_gamma, punishment_gae_lambda))
+        self._gammas = np.array([[gamma] for gamma, _ in discounts], dtype=np.float32)
+        self._gamma_lambdas = np.array([[gamma * lam] for gamma, lam in discounts], dtype=np.float32)
 
     def reset(self) -> None:
-        shape = (self.buffer_size, self.n_envs)
-        self.punishments = np.zeros(shape, dtype=np.float32)
-        self.punishment_values = np.zeros(shape, dtype=np.float32)
-        self.punishment_returns = np.zeros(shape, dtype=np.float32)
-        self.inverse_temperatures = np.zeros(shape, dtype=np.float32)
-        self.interests = np.zeros(shape, dtype=np.float32)
-        self.utilities = np.zeros(shape, dtype=np.float32)
         super().reset()  # type: ignore[misc]
+        # Both streams side by side, so that their TD errors and GAE take one pass;
+        # ``rewards``/``punishments`` and ``values``/``punishment_values`` are views into them
+        shape = (self.buffer_size, 2, self.n_envs)
+        self._evaluations = np.zeros(shape, dtype=np.float32)
+        self._critic_values = np.zeros(shape, dtype=np.float32)
+        self.rewards, self.punishments = self._evaluations[:, 0], self._evaluations[:, 1]
+        self.values, self.punishment_values = self._critic_values[:, 0], self._critic_values[:, 1]
+        self.punishment_returns = np.zeros((self.buffer_size, self.n_envs), dtype=np.float32)
+        self.inverse_temperatures = np.zeros((self.buffer_size, self.n_envs), dtype=np.float32)
+        self.interests = np.zeros((self.buffer_size, self.n_envs), dtype=np.float32)
+        self.utilities = np.zeros((self.buffer_size, self.n_envs), dtype=np.float32)
 
     def add(
         self,
@@ -115,15 +122,14 @@ class TwoDimBufferMixin:
         self, last_values: th.Tensor, dones: np.ndarray, last_punishment_values: th.Tensor
     ) -> None:
         """Per stream TD errors and GAE with its own gamma and lambda; the utility is the actor's advantage."""
-        discounts = ((self.gamma, self.gae_lambda), (self.punishment_gamma, self.punishment_gae_lambda))
         deltas, advantages = td_errors_and_gae(
-            np.stack([self.rewards, self.punishments], axis=1),
-            np.stack([self.values, self.punishment_values], axis=1),
+            self._evaluations,
+            self._critic_values,
             self.episode_starts,
             np.stack([last_values.cpu().numpy().flatten(), last_punishment_values.cpu().numpy().flatten()]),
             dones,
-            np.array([[gamma] for gamma, _ in discounts], dtype=np.float32),
-            np.array([[gamma * lam] for gamma, lam in discounts], dtype=np.float32),
+            self._gammas,
+            self._gamma_lambdas,
         )
         reward_deltas, punishment_deltas = deltas[:, 0], deltas[:, 1]
         reward_advantages, punishment_advantages = advantages[:, 0], advantages[:, 1]
@@ -134,8 +140,9 @@ class TwoDimBufferMixin:
         self.utilities = reward_deltas - punishment_deltas
 
     def get(self, batch_size: int | None = None) -> Generator[TwoDimRolloutBufferSamples, None, None]:
-        if not self.generator_ready:
-            self.punishment_returns = self.swap_and_flatten(self.punishment_returns)  # type: ignore[attr-defined]
+        if not self.generator_ready:  # flattened like SB3's arrays, so that they stay aligned with them
+            for name in ("punishment_values", "punishment_returns"):
+                setattr(self, name, self.swap_and_flatten(getattr(self, name)))  # type: ignore[attr-defined]
         yield from super().get(batch_size)  # type: ignore[misc]
 
     def _get_samples(self, batch_inds: np.ndarray, env: VecNormalize | None = None) -> TwoDimRolloutBufferSamples:
