@@ -1,6 +1,6 @@
 """TwoDimA2C: the actor-critic of two-dimensional evaluation reinforcement learning (2D-RL)."""
 
-from typing import Any, ClassVar, NamedTuple, TypeVar
+from typing import Any, ClassVar, TypeVar
 
 import numpy as np
 import torch as th
@@ -27,15 +27,6 @@ SelfTwoDimA2C = TypeVar("SelfTwoDimA2C", bound="TwoDimA2C")
 
 def _flat(values: th.Tensor) -> np.ndarray:
     return values.cpu().numpy().flatten()
-
-
-class _Step(NamedTuple):
-    """One vectorised step: its unbootstrapped evaluations and the critics' values of the state it left."""
-
-    reward: np.ndarray
-    punishment: np.ndarray
-    value: np.ndarray
-    punishment_value: np.ndarray
 
 
 def _check_unit_interval(name: str, value: float) -> None:
@@ -175,20 +166,27 @@ class TwoDimA2C(A2C):
     def _excluded_save_params(self) -> list[str]:
         return [*super()._excluded_save_params(), "_carried_interest"]
 
-    def _interest(self, last_step: _Step, values: np.ndarray, punishment_values: np.ndarray) -> np.ndarray:
-        """Interest ``|delta_R| + |delta_P|`` (eq. 2, 7, 8) of the transition into each env's current state.
+    def _interest(
+        self,
+        rewards: np.ndarray,
+        punishments: np.ndarray,
+        critics: tuple[np.ndarray, np.ndarray],
+        next_critics: tuple[np.ndarray, np.ndarray],
+        dones: np.ndarray,
+    ) -> np.ndarray:
+        """Interest ``|delta_R| + |delta_P|`` (eq. 2, 7, 8) of one vectorised transition, before bootstrapping.
 
-        An env whose current state starts an episode has interest 0.
+        An env whose episode ended has interest 0: its next state starts a new episode.
         """
-        delta_r = last_step.reward + self.gamma * values - last_step.value
-        delta_p = last_step.punishment + self.punishment_gamma * punishment_values - last_step.punishment_value
-        return (np.abs(delta_r) + np.abs(delta_p)) * (1.0 - self._last_episode_starts)
+        delta_r = rewards + self.gamma * next_critics[0] - critics[0]
+        delta_p = punishments + self.punishment_gamma * next_critics[1] - critics[1]
+        return np.where(dones, 0.0, np.abs(delta_r) + np.abs(delta_p))
 
     def _interest_at_rollout_start(self) -> np.ndarray:
         """Interest carried over from the previous rollout's last transition, if it led into ``_last_obs``.
 
-        That transition was valued at the end of the previous rollout, by the critics of that time
-        at both ends; after a reset or a new env there is no such transition (interest 0).
+        That transition was valued by the critics of the previous rollout at both ends; after a reset
+        or a new env there is no such transition (interest 0).
         """
         carried = self._carried_interest
         if carried is None or carried[0] is not self._last_obs:
@@ -202,25 +200,26 @@ class TwoDimA2C(A2C):
         rollout_buffer: RolloutBuffer,
         n_rollout_steps: int,
     ) -> bool:
-        """SB3's rollout loop with both evaluation streams and the interest temperature of eq. 9."""
+        """SB3's rollout loop with both evaluation streams and the interest temperature of eq. 9.
+
+        Each step evaluates the state it led to at once: that evaluation gives the transition's
+        interest, which sets the temperature of the next action, and it is reused to take that
+        action (or, after the last step, to bootstrap the returns).
+        """
         assert self._last_obs is not None, "No previous observation was provided"
         self.policy.set_training_mode(False)
         n_steps = 0
         rollout_buffer.reset()
         callback.on_rollout_start()
         reward_split = make_reward_split(self.reward_split)
-        last_step: _Step | None = None
+        with th.no_grad():
+            state = self.policy.evaluate_state(obs_as_tensor(self._last_obs, self.device))  # type: ignore[arg-type]
+        latent_pi, values, punishment_values = state
+        critics = _flat(values), _flat(punishment_values)
+        inverse_temperature = self.policy.inverse_temperature(self._interest_at_rollout_start())
 
         while n_steps < n_rollout_steps:
             with th.no_grad():
-                obs_tensor = obs_as_tensor(self._last_obs, self.device)  # type: ignore[arg-type]
-                latent_pi, values, punishment_values = self.policy.evaluate_state(obs_tensor)
-                step_values = _flat(values), _flat(punishment_values)
-                if last_step is None:
-                    interest = self._interest_at_rollout_start()
-                else:
-                    interest = self._interest(last_step, *step_values)
-                inverse_temperature = self.policy.inverse_temperature(interest)
                 distribution = self.policy.tempered_distribution(latent_pi, inverse_temperature)
                 actions = distribution.get_actions()
                 log_probs = distribution.log_prob(actions)
@@ -246,8 +245,11 @@ class TwoDimA2C(A2C):
             if isinstance(self.action_space, spaces.Discrete):
                 actions = actions.reshape(-1, 1)
 
+            with th.no_grad():
+                next_state = self.policy.evaluate_state(obs_as_tensor(new_obs, self.device))  # type: ignore[arg-type]
+            next_critics = _flat(next_state[1]), _flat(next_state[2])
             rewards, punishments = split_rewards(reward_split, rewards, infos, self.num_timesteps)
-            last_step = _Step(rewards.copy(), punishments.copy(), *step_values)
+            interest = self._interest(rewards, punishments, critics, next_critics, dones)
             # Bootstrap both critics on time-limit truncation, as SB3 does (GitHub issue #633)
             for idx, done in enumerate(dones):
                 if (
@@ -269,18 +271,18 @@ class TwoDimA2C(A2C):
                 values,
                 log_probs,
                 punishment=punishments,
-                punishment_value=step_values[1],
+                punishment_value=critics[1],
                 inverse_temperature=inverse_temperature,
             )
             self._last_obs = new_obs  # type: ignore[assignment]
             self._last_episode_starts = dones
+            (latent_pi, values, punishment_values), critics = next_state, next_critics
+            inverse_temperature = self.policy.inverse_temperature(interest)
 
-        with th.no_grad():
-            values, punishment_values = self.policy.predict_critics(obs_as_tensor(new_obs, self.device))  # type: ignore[arg-type]
         rollout_buffer.compute_returns_and_advantage(
             last_values=values, dones=dones, last_punishment_values=punishment_values
         )
-        self._carried_interest = (new_obs, rollout_buffer.interests[-1] * (1.0 - dones))
+        self._carried_interest = (new_obs, interest)
         self.policy.update_running_interest(float(rollout_buffer.interests.mean()))
 
         callback.update_locals(locals())
@@ -327,6 +329,8 @@ class TwoDimA2C(A2C):
         self, policy_loss: th.Tensor, value_loss: th.Tensor, punishment_value_loss: th.Tensor, entropy_loss: th.Tensor
     ) -> None:
         buffer = self.rollout_buffer
+        losses = th.stack([entropy_loss, policy_loss, value_loss, punishment_value_loss]).tolist()
+        interest, utility, punishment = np.mean((buffer.interests, buffer.utilities, buffer.punishments), axis=(1, 2))
         self.logger.record("train/n_updates", self._n_updates, exclude="tensorboard")
         self.logger.record(
             "train/explained_variance", explained_variance(buffer.values.flatten(), buffer.returns.flatten())
@@ -335,16 +339,14 @@ class TwoDimA2C(A2C):
             "train/punishment_explained_variance",
             explained_variance(buffer.punishment_values.flatten(), buffer.punishment_returns.flatten()),
         )
-        self.logger.record("train/entropy_loss", entropy_loss.item())
-        self.logger.record("train/policy_loss", policy_loss.item())
-        self.logger.record("train/value_loss", value_loss.item())
-        self.logger.record("train/punishment_value_loss", punishment_value_loss.item())
-        self.logger.record("train/interest", float(buffer.interests.mean()))
-        self.logger.record("train/utility", float(buffer.utilities.mean()))
-        tempered = buffer.inverse_temperatures > 0
-        if tempered.any():
-            self.logger.record("train/temperature", float(np.mean(1.0 / buffer.inverse_temperatures[tempered])))
-        self.logger.record("rollout/punishment_mean", float(buffer.punishments.mean()))
+        for key, loss in zip(("entropy", "policy", "value", "punishment_value"), losses, strict=True):
+            self.logger.record(f"train/{key}_loss", loss)
+        self.logger.record("train/interest", float(interest))
+        self.logger.record("train/utility", float(utility))
+        tempered = buffer.inverse_temperatures[buffer.inverse_temperatures > 0]
+        if tempered.size:
+            self.logger.record("train/temperature", float(np.mean(1.0 / tempered)))
+        self.logger.record("rollout/punishment_mean", float(punishment))
         if hasattr(self.policy, "log_std"):
             self.logger.record("train/std", th.exp(self.policy.log_std).mean().item())
 

@@ -62,6 +62,27 @@ def test_bad_punishment_is_an_error_at_its_step(punishment: float) -> None:
         model.learn(8)
 
 
+@pytest.mark.filterwarnings("ignore:overflow encountered in cast")
+@pytest.mark.parametrize(
+    ("rewards", "infos", "bad_env"),
+    [
+        ([0.0, float("nan")], [{}, {}], 1),
+        ([float("-inf"), 0.0], [{}, {}], 0),
+        ([0.0, 0.0], [{"cost": 0.0}, {"cost": 1e300}], 1),  # finite in float64, inf in the float32 buffer
+    ],
+)
+def test_bad_feedback_names_the_env(rewards: list, infos: list, bad_env: int) -> None:
+    with pytest.raises(ValueError, match=f"env {bad_env} at timestep 3"):
+        split_rewards(make_reward_split("auto"), np.array(rewards), infos, 3)
+
+
+def test_large_finite_feedback_passes() -> None:
+    rewards = np.full(8, 3e38, dtype=np.float32)  # the sum overflows float32, each value does not
+    reward_r, reward_p = split_rewards(make_reward_split("sign"), rewards, [{}] * 8, 1)
+    np.testing.assert_array_equal(reward_r, rewards)
+    np.testing.assert_array_equal(reward_p, 0.0)
+
+
 def test_split_survives_save_and_load(tmp_path: Path) -> None:
     env = ScriptedFeedbackEnv(FEEDBACK["info"])
     TwoDimA2C("MlpPolicy", env, n_steps=4, reward_split="sign", seed=0).learn(4).save(tmp_path / "model.zip")
