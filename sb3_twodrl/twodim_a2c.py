@@ -10,7 +10,7 @@ from stable_baselines3.common.buffers import RolloutBuffer
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.policies import BasePolicy
 from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedule
-from stable_baselines3.common.utils import explained_variance, obs_as_tensor
+from stable_baselines3.common.utils import obs_as_tensor
 from stable_baselines3.common.vec_env import VecEnv
 from torch.nn import functional as F
 
@@ -331,14 +331,10 @@ class TwoDimA2C(A2C):
         buffer = self.rollout_buffer
         losses = th.stack([entropy_loss, policy_loss, value_loss, punishment_value_loss]).tolist()
         interest, utility, punishment = np.mean((buffer.interests, buffer.utilities, buffer.punishments), axis=(1, 2))
+        explained, punishment_explained = buffer.explained_variances()
         self.logger.record("train/n_updates", self._n_updates, exclude="tensorboard")
-        self.logger.record(
-            "train/explained_variance", explained_variance(buffer.values.flatten(), buffer.returns.flatten())
-        )
-        self.logger.record(
-            "train/punishment_explained_variance",
-            explained_variance(buffer.punishment_values.flatten(), buffer.punishment_returns.flatten()),
-        )
+        self.logger.record("train/explained_variance", explained)
+        self.logger.record("train/punishment_explained_variance", punishment_explained)
         for key, loss in zip(("entropy", "policy", "value", "punishment_value"), losses, strict=True):
             self.logger.record(f"train/{key}_loss", loss)
         self.logger.record("train/interest", float(interest))
