@@ -204,7 +204,7 @@ class TwoDimA2C(A2C):
 
         Each step evaluates the state it led to at once: that evaluation gives the transition's
         interest, which sets the temperature of the next action, and it is reused to take that
-        action (or, after the last step, to bootstrap the returns).
+        action (after the last step, to bootstrap the returns).
         """
         assert self._last_obs is not None, "No previous observation was provided"
         self.policy.set_training_mode(False)
@@ -213,8 +213,8 @@ class TwoDimA2C(A2C):
         callback.on_rollout_start()
         reward_split = make_reward_split(self.reward_split)
         with th.no_grad():
-            state = self.policy.evaluate_state(obs_as_tensor(self._last_obs, self.device))  # type: ignore[arg-type]
-        latent_pi, values, punishment_values = state
+            obs_tensor = obs_as_tensor(self._last_obs, self.device)  # type: ignore[arg-type]
+            latent_pi, values, punishment_values = self.policy.evaluate_state(obs_tensor)
         critics = _flat(values), _flat(punishment_values)
         inverse_temperature = self.policy.inverse_temperature(self._interest_at_rollout_start())
 
@@ -246,8 +246,12 @@ class TwoDimA2C(A2C):
                 actions = actions.reshape(-1, 1)
 
             with th.no_grad():
-                next_state = self.policy.evaluate_state(obs_as_tensor(new_obs, self.device))  # type: ignore[arg-type]
-            next_critics = _flat(next_state[1]), _flat(next_state[2])
+                obs_tensor = obs_as_tensor(new_obs, self.device)  # type: ignore[arg-type]
+                if n_steps < n_rollout_steps:
+                    latent_pi, *next_values = self.policy.evaluate_state(obs_tensor)
+                else:  # only the critics are needed after the last step, to bootstrap the returns
+                    next_values = self.policy.predict_critics(obs_tensor)
+            next_critics = _flat(next_values[0]), _flat(next_values[1])
             rewards, punishments = split_rewards(reward_split, rewards, infos, self.num_timesteps)
             interest = self._interest(rewards, punishments, critics, next_critics, dones)
             # Bootstrap both critics on time-limit truncation, as SB3 does (GitHub issue #633)
@@ -276,7 +280,7 @@ class TwoDimA2C(A2C):
             )
             self._last_obs = new_obs  # type: ignore[assignment]
             self._last_episode_starts = dones
-            (latent_pi, values, punishment_values), critics = next_state, next_critics
+            (values, punishment_values), critics = next_values, next_critics
             inverse_temperature = self.policy.inverse_temperature(interest)
 
         rollout_buffer.compute_returns_and_advantage(
