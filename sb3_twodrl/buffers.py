@@ -92,16 +92,17 @@ class TwoDimBufferMixin:
 
     def reset(self) -> None:
         super().reset()  # type: ignore[misc]
-        # Both streams side by side, so that their TD errors, GAE and statistics take one pass each;
-        # the per-stream arrays (``rewards``, ``punishments``, ``values``, ...) are views into them
+        # Both streams side by side, so that their TD errors and GAE take one pass;
+        # ``rewards``/``punishments`` and ``values``/``punishment_values`` are views into them
         shape = (self.buffer_size, 2, self.n_envs)
-        self._evaluations, self._critic_values, self._returns = (np.zeros(shape, dtype=np.float32) for _ in range(3))
+        self._evaluations = np.zeros(shape, dtype=np.float32)
+        self._critic_values = np.zeros(shape, dtype=np.float32)
         self.rewards, self.punishments = self._evaluations[:, 0], self._evaluations[:, 1]
         self.values, self.punishment_values = self._critic_values[:, 0], self._critic_values[:, 1]
-        self.returns, self.punishment_returns = self._returns[:, 0], self._returns[:, 1]
-        self.inverse_temperatures, self.interests, self.utilities = (
-            np.zeros((self.buffer_size, self.n_envs), dtype=np.float32) for _ in range(3)
-        )
+        self.punishment_returns = np.zeros((self.buffer_size, self.n_envs), dtype=np.float32)
+        self.inverse_temperatures = np.zeros((self.buffer_size, self.n_envs), dtype=np.float32)
+        self.interests = np.zeros((self.buffer_size, self.n_envs), dtype=np.float32)
+        self.utilities = np.zeros((self.buffer_size, self.n_envs), dtype=np.float32)
 
     def add(
         self,
@@ -133,19 +134,10 @@ class TwoDimBufferMixin:
         reward_deltas, punishment_deltas = deltas[:, 0], deltas[:, 1]
         reward_advantages, punishment_advantages = advantages[:, 0], advantages[:, 1]
         self.advantages = reward_advantages - self.punishment_weight * punishment_advantages
-        self._returns = advantages + self._critic_values
-        self.returns, self.punishment_returns = self._returns[:, 0], self._returns[:, 1]
+        self.returns = reward_advantages + self.values
+        self.punishment_returns = punishment_advantages + self.punishment_values
         self.interests = np.abs(reward_deltas) + np.abs(punishment_deltas)
         self.utilities = reward_deltas - punishment_deltas
-
-    def explained_variances(self) -> tuple[float, float]:
-        """SB3's ``explained_variance`` of the reward and of the punishment critic over this rollout."""
-        var_returns = self._returns.var(axis=(0, 2)).tolist()
-        var_errors = (self._returns - self._critic_values).var(axis=(0, 2)).tolist()
-        reward, punishment = (
-            np.nan if var == 0 else 1.0 - error / var for var, error in zip(var_returns, var_errors, strict=True)
-        )
-        return reward, punishment
 
     def get(self, batch_size: int | None = None) -> Generator[TwoDimRolloutBufferSamples, None, None]:
         if not self.generator_ready:  # flattened like SB3's arrays, so that they stay aligned with them

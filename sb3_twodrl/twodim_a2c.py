@@ -10,7 +10,7 @@ from stable_baselines3.common.buffers import RolloutBuffer
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.policies import BasePolicy
 from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedule
-from stable_baselines3.common.utils import obs_as_tensor
+from stable_baselines3.common.utils import explained_variance, obs_as_tensor
 from stable_baselines3.common.vec_env import VecEnv
 from torch.nn import functional as F
 
@@ -334,19 +334,20 @@ class TwoDimA2C(A2C):
     ) -> None:
         buffer = self.rollout_buffer
         losses = th.stack([entropy_loss, policy_loss, value_loss, punishment_value_loss]).tolist()
-        interest, utility, punishment = np.mean((buffer.interests, buffer.utilities, buffer.punishments), axis=(1, 2))
-        explained, punishment_explained = buffer.explained_variances()
         self.logger.record("train/n_updates", self._n_updates, exclude="tensorboard")
-        self.logger.record("train/explained_variance", explained)
-        self.logger.record("train/punishment_explained_variance", punishment_explained)
-        for key, loss in zip(("entropy", "policy", "value", "punishment_value"), losses, strict=True):
-            self.logger.record(f"train/{key}_loss", loss)
-        self.logger.record("train/interest", float(interest))
-        self.logger.record("train/utility", float(utility))
+        for name, values, returns in (
+            ("explained_variance", buffer.values, buffer.returns),
+            ("punishment_explained_variance", buffer.punishment_values, buffer.punishment_returns),
+        ):
+            self.logger.record(f"train/{name}", explained_variance(values.flatten(), returns.flatten()))
+        for name, loss in zip(("entropy", "policy", "value", "punishment_value"), losses, strict=True):
+            self.logger.record(f"train/{name}_loss", loss)
+        self.logger.record("train/interest", float(buffer.interests.mean()))
+        self.logger.record("train/utility", float(buffer.utilities.mean()))
         tempered = buffer.inverse_temperatures[buffer.inverse_temperatures > 0]
         if tempered.size:
             self.logger.record("train/temperature", float(np.mean(1.0 / tempered)))
-        self.logger.record("rollout/punishment_mean", float(punishment))
+        self.logger.record("rollout/punishment_mean", float(buffer.punishments.mean()))
         if hasattr(self.policy, "log_std"):
             self.logger.record("train/std", th.exp(self.policy.log_std).mean().item())
 
