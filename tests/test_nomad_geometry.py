@@ -2,6 +2,7 @@
 
 import json
 import math
+import os
 
 import numpy as np
 import pytest
@@ -97,6 +98,21 @@ def test_missing_and_malformed_map_files(tmp_path):
         load_map(bad)
     with pytest.raises(TypeError, match="map must be a path"):
         load_map(42)
+
+
+def test_office_core_is_cached_per_file_version(tmp_path):
+    path = write_map(tmp_path)
+    first = office_core(path)
+    assert office_core(str(path)) is first
+    data = json.loads(path.read_text())
+    data["start"] = [100, 60]
+    path.write_text(json.dumps(data))
+    stamp = path.stat().st_mtime_ns + 10**9  # visible even where the file system keeps coarse timestamps
+    os.utime(path, ns=(stamp, stamp))
+    edited = office_core(path)
+    np.testing.assert_array_equal(edited.lattice.cells[edited.start_cell], [100, 60])
+    with pytest.raises(ValueError, match="does not exist"):
+        office_core(tmp_path / "nope.json")
 
 
 def test_sensor_source_seam_for_databases():

@@ -59,14 +59,19 @@ def _number_list(value: object, length: int, what: str, source: str) -> tuple[fl
     return out
 
 
+def map_source(path: str | Path | None = None) -> str:
+    """The resolved path of a map file; ``None`` is the shipped office."""
+    if path is not None and not isinstance(path, str | Path):
+        raise TypeError(f"map must be a path (str or pathlib.Path) or None, got {type(path).__name__}: {path!r}")
+    return str((default_map_path() if path is None else Path(path)).resolve())
+
+
 def load_map(path: str | Path | None = None) -> OfficeMap:
     """Read and validate a map file (format documented in ``docs/nomad.md``); ``None`` loads the office.
 
     Raises ``ValueError`` naming the file and the offending entry.
     """
-    if path is not None and not isinstance(path, str | Path):
-        raise TypeError(f"map must be a path (str or pathlib.Path) or None, got {type(path).__name__}: {path!r}")
-    source = str((default_map_path() if path is None else Path(path)).resolve())
+    source = map_source(path)
     try:
         data = json.loads(Path(source).read_text())
     except FileNotFoundError as err:

@@ -20,6 +20,7 @@ from envs.nomad.geometry import (
     build_lattice,
     clearance,
     load_map,
+    map_source,
     swept_clearance,
 )
 from envs.nomad.sensors import NoiseModel
@@ -78,8 +79,9 @@ def _core(source: str, mtime_ns: int) -> OfficeCore:
 
 def office_core(map_path: str | Path | None = None) -> OfficeCore:
     """The (cached) :class:`OfficeCore` of a map file; ``None`` is the shipped office."""
-    office = load_map(map_path)
-    return _core(office.source, Path(office.source).stat().st_mtime_ns)
+    source = Path(map_source(map_path))
+    # A missing file gets its error from load_map, uncached
+    return _core(str(source), source.stat().st_mtime_ns if source.exists() else -1)
 
 
 def episode_keys(base: np.ndarray, episode: np.ndarray) -> np.ndarray:
