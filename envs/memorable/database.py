@@ -14,7 +14,7 @@ import datetime as _dt
 import hashlib
 import json
 import zipfile
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -265,7 +265,7 @@ def record_database(
     recording = {
         "source": "simulated",
         "sensor_model": "ideal" if noise is None else "realistic (NomadOfficeReal-v0 NoiseModel)",
-        "noise_model": None if noise is None else vars(noise),
+        "noise_model": None if noise is None else asdict(noise),
         "samples_per_cell": k,
         "seed": seed,
         "how": "virtual robot placed on every reachable lattice cell, k independent noisy readings per cell",

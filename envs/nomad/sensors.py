@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import sys
 from dataclasses import dataclass
-from functools import cache
+from functools import cache, cached_property
 from statistics import NormalDist
 
 import numpy as np
@@ -106,10 +106,14 @@ class NoiseModel:
         if not isinstance(self.dropout, int | float) or not 0 <= self.dropout <= 1:
             raise ValueError(f"NoiseModel.dropout must be in [0, 1], got {self.dropout!r}")
 
+    @cached_property
+    def _sd_terms(self) -> tuple[np.ndarray, np.ndarray]:
+        return per_sensor(self.sonar_sd_cm, self.ir_sd_cm), per_sensor(self.sonar_sd_frac, self.ir_sd_frac)
+
     def sd(self, ranges_cm: np.ndarray) -> np.ndarray:
         """Noise standard deviation ``(..., 32)`` of exact ranges (cm)."""
-        frac = per_sensor(self.sonar_sd_frac, self.ir_sd_frac)
-        return per_sensor(self.sonar_sd_cm, self.ir_sd_cm) + frac * ranges_cm
+        base, frac = self._sd_terms
+        return base + frac * ranges_cm
 
     def apply(
         self, ranges_cm: np.ndarray, keys: np.ndarray, steps: np.ndarray, sd: np.ndarray | None = None
