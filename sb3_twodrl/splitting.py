@@ -41,11 +41,11 @@ def split_sign(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np
 
 def split_auto(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
     """Per env: ``info`` if ``info["punishment"]`` exists, else ``cost`` if ``info["cost"]`` exists, else ``sign``."""
+    if all("punishment" in info for info in infos):
+        return split_info(rewards, infos)
     keyed = ["punishment" in info or "cost" in info for info in infos]
     if not any(keyed):
         return split_sign(rewards, infos)
-    if all("punishment" in info for info in infos):
-        return split_info(rewards, infos)
     reward_r, reward_p = split_sign(rewards, infos)
     for idx in np.flatnonzero(keyed):
         split = split_info if "punishment" in infos[idx] else split_cost
@@ -72,6 +72,23 @@ def make_reward_split(reward_split: str | RewardSplit) -> BatchSplit:
     )
 
 
+PYTHON_CHECK_MAX_ENVS = 128
+
+
+def _all_valid(reward_r: np.ndarray, reward_p: np.ndarray) -> bool:
+    """Whether every ``r_R`` is finite and every ``r_P`` finite and >= 0.
+
+    Inside the training loop a numpy reduction costs tens of times what it costs alone, so up to
+    ``PYTHON_CHECK_MAX_ENVS`` envs the check runs on Python floats (a NaN or an infinity makes the
+    float64 sum non-finite, a negative ``r_P`` the min); beyond, where a Python float per env
+    costs more, on numpy with ``count_nonzero`` (not a reduction ufunc, so cheap).
+    """
+    if reward_p.size <= PYTHON_CHECK_MAX_ENVS:
+        punishments = reward_p.tolist()
+        return min(punishments) >= 0.0 and math.isfinite(sum(reward_r.tolist()) + sum(punishments))
+    return np.count_nonzero(np.isfinite(reward_r) & np.isfinite(reward_p) & (reward_p >= 0.0)) == reward_p.size
+
+
 def split_rewards(
     reward_split: BatchSplit, rewards: np.ndarray, infos: Sequence[dict[str, Any]], timestep: int
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -83,10 +100,7 @@ def split_rewards(
     """
     reward_r, reward_p = reward_split(rewards.astype(np.float32, copy=False), infos)
     reward_r, reward_p = reward_r.astype(np.float32, copy=False), reward_p.astype(np.float32, copy=False)
-    # Screened on Python floats (numpy reductions cost more per step than all of this at small
-    # n_envs): a NaN or an infinity anywhere makes the float64 sum non-finite, a negative r_P the min
-    punishments = reward_p.tolist()
-    if not (min(punishments) >= 0.0 and math.isfinite(sum(reward_r.tolist()) + sum(punishments))):
+    if not _all_valid(reward_r, reward_p):
         idx = int(np.flatnonzero(~(np.isfinite(reward_r) & np.isfinite(reward_p) & (reward_p >= 0.0)))[0])
         raise ValueError(
             f"reward split gave (r_R, r_P) = ({reward_r[idx]}, {reward_p[idx]}) for env {idx} at timestep {timestep}: "

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from sb3_twodrl import TwoDimA2C
-from sb3_twodrl.splitting import make_reward_split, split_rewards
+from sb3_twodrl.splitting import PYTHON_CHECK_MAX_ENVS, make_reward_split, split_rewards
 from tests.toy_envs import ScriptedFeedbackEnv
 
 FEEDBACK: dict[str, list[tuple[float, dict[str, Any]]]] = {
@@ -63,22 +63,22 @@ def test_bad_punishment_is_an_error_at_its_step(punishment: float) -> None:
 
 
 @pytest.mark.filterwarnings("ignore:overflow encountered in cast")
+@pytest.mark.parametrize("n_envs", [4, PYTHON_CHECK_MAX_ENVS + 1])  # both ways of checking
 @pytest.mark.parametrize(
-    ("rewards", "infos", "bad_env"),
-    [
-        ([0.0, float("nan")], [{}, {}], 1),
-        ([float("-inf"), 0.0], [{}, {}], 0),
-        ([0.0, 0.0], [{"cost": 0.0}, {"cost": 1e300}], 1),  # finite in float64, inf in the float32 buffer
-    ],
+    ("reward", "cost"),
+    [(float("nan"), 0.0), (float("-inf"), 0.0), (0.0, -0.5), (0.0, float("nan")), (0.0, float("inf")), (0.0, 1e300)],
 )
-def test_bad_feedback_names_the_env(rewards: list, infos: list, bad_env: int) -> None:
-    with pytest.raises(ValueError, match=f"env {bad_env} at timestep 3"):
-        split_rewards(make_reward_split("auto"), np.array(rewards), infos, 3)
+def test_bad_feedback_names_the_env(n_envs: int, reward: float, cost: float) -> None:
+    rewards, infos = np.zeros(n_envs), [{"cost": 0.0} for _ in range(n_envs)]
+    rewards[2], infos[2] = reward, {"cost": cost}  # 1e300 is finite, but not in the float32 buffer
+    with pytest.raises(ValueError, match="env 2 at timestep 3"):
+        split_rewards(make_reward_split("cost"), rewards, infos, 3)
 
 
-def test_large_finite_feedback_passes() -> None:
-    rewards = np.full(8, 3e38, dtype=np.float32)  # the sum overflows float32, each value does not
-    reward_r, reward_p = split_rewards(make_reward_split("sign"), rewards, [{}] * 8, 1)
+@pytest.mark.parametrize("n_envs", [8, PYTHON_CHECK_MAX_ENVS + 1])
+def test_large_finite_feedback_passes(n_envs: int) -> None:
+    rewards = np.full(n_envs, 3e38, dtype=np.float32)  # their sum overflows float32, no value does
+    reward_r, reward_p = split_rewards(make_reward_split("sign"), rewards, [{}] * n_envs, 1)
     np.testing.assert_array_equal(reward_r, rewards)
     np.testing.assert_array_equal(reward_p, 0.0)
 
