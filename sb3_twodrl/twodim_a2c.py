@@ -29,6 +29,11 @@ def _flat(values: th.Tensor) -> np.ndarray:
     return values.cpu().numpy().flatten()
 
 
+def _mean(values: np.ndarray) -> float:
+    """``values.mean()`` by way of ``sum``: inside the training loop ``ndarray.mean`` costs several times more."""
+    return float(values.sum()) / values.size
+
+
 def _check_unit_interval(name: str, value: float) -> None:
     if not 0.0 <= value <= 1.0:
         raise ValueError(f"{name} must be in [0, 1], got {value!r}")
@@ -287,7 +292,7 @@ class TwoDimA2C(A2C):
             last_values=values, dones=dones, last_punishment_values=punishment_values
         )
         self._carried_interest = (new_obs, interest)
-        self.policy.update_running_interest(float(rollout_buffer.interests.mean()))
+        self.policy.update_running_interest(_mean(rollout_buffer.interests))
 
         callback.update_locals(locals())
         callback.on_rollout_end()
@@ -342,12 +347,12 @@ class TwoDimA2C(A2C):
             self.logger.record(f"train/{name}", explained_variance(values.flatten(), returns.flatten()))
         for name, loss in zip(("entropy", "policy", "value", "punishment_value"), losses, strict=True):
             self.logger.record(f"train/{name}_loss", loss)
-        self.logger.record("train/interest", float(buffer.interests.mean()))
-        self.logger.record("train/utility", float(buffer.utilities.mean()))
+        self.logger.record("train/interest", _mean(buffer.interests))
+        self.logger.record("train/utility", _mean(buffer.utilities))
         tempered = buffer.inverse_temperatures[buffer.inverse_temperatures > 0]
         if tempered.size:
-            self.logger.record("train/temperature", float(np.mean(1.0 / tempered)))
-        self.logger.record("rollout/punishment_mean", float(buffer.punishments.mean()))
+            self.logger.record("train/temperature", _mean(1.0 / tempered))
+        self.logger.record("rollout/punishment_mean", _mean(buffer.punishments))
         if hasattr(self.policy, "log_std"):
             self.logger.record("train/std", th.exp(self.policy.log_std).mean().item())
 

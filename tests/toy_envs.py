@@ -8,7 +8,10 @@ from gymnasium import spaces
 
 
 class ScriptedFeedbackEnv(gym.Env):
-    """Returns a fixed cycle of ``(reward, info)`` pairs, whatever the action; never terminates."""
+    """Returns a fixed cycle of ``(reward, info)`` pairs, whatever the action; never terminates.
+
+    The observation is the position in the cycle, so that the critics can tell the steps apart.
+    """
 
     def __init__(self, feedback: list[tuple[float, dict[str, Any]]]):
         self.feedback = feedback
@@ -24,7 +27,8 @@ class ScriptedFeedbackEnv(gym.Env):
     def step(self, action: int) -> tuple[np.ndarray, float, bool, bool, dict]:
         reward, info = self.feedback[self._t % len(self.feedback)]
         self._t += 1
-        return np.zeros(1, dtype=np.float32), reward, False, False, dict(info)
+        phase = (self._t % len(self.feedback)) / len(self.feedback)
+        return np.array([phase], dtype=np.float32), reward, False, False, dict(info)
 
 
 class TwoStateChain(gym.Env):
