@@ -42,7 +42,7 @@ def td_errors_and_gae(
     next_values = np.concatenate([values[1:], last_values[None]])
     next_non_terminal = 1.0 - np.concatenate([episode_starts[1:], dones[None].astype(np.float32)])[:, None, :]
     deltas = rewards + gamma * next_values * next_non_terminal - values
-    advantages = np.zeros_like(rewards)
+    advantages = np.empty_like(rewards)  # every step is written below
     last_gae_lam = 0
     for step in reversed(range(len(rewards))):
         last_gae_lam = deltas[step] + gamma_lambda * next_non_terminal[step] * last_gae_lam
@@ -126,7 +126,7 @@ class TwoDimBufferMixin:
             self._evaluations,
             self._critic_values,
             self.episode_starts,
-            np.stack([last_values.cpu().numpy().flatten(), last_punishment_values.cpu().numpy().flatten()]),
+            np.array([last_values.cpu().numpy().flatten(), last_punishment_values.cpu().numpy().flatten()]),
             dones,
             self._gammas,
             self._gamma_lambdas,

@@ -34,6 +34,18 @@ def _mean(values: np.ndarray) -> float:
     return float(values.sum()) / values.size
 
 
+def _variance(values: np.ndarray) -> float:
+    """``values.var()`` by way of :func:`_mean`, for the same reason."""
+    deviations = values - _mean(values)
+    return _mean(deviations * deviations)
+
+
+def _explained_variance(predictions: np.ndarray, targets: np.ndarray) -> float:
+    """SB3's ``explained_variance`` (NaN where the targets do not vary) by way of :func:`_variance`."""
+    target_variance = _variance(targets)
+    return np.nan if target_variance == 0 else 1.0 - _variance(targets - predictions) / target_variance
+
+
 def _check_unit_interval(name: str, value: float) -> None:
     if not 0.0 <= value <= 1.0:
         raise ValueError(f"{name} must be in [0, 1], got {value!r}")
@@ -340,11 +352,14 @@ class TwoDimA2C(A2C):
         buffer = self.rollout_buffer
         losses = th.stack([entropy_loss, policy_loss, value_loss, punishment_value_loss]).tolist()
         self.logger.record("train/n_updates", self._n_updates, exclude="tensorboard")
-        for name, values, returns in (
-            ("explained_variance", buffer.values, buffer.returns),
-            ("punishment_explained_variance", buffer.punishment_values, buffer.punishment_returns),
-        ):
-            self.logger.record(f"train/{name}", explained_variance(values.flatten(), returns.flatten()))
+        # A2C's own key as A2C computes it; the punishment critic's the same, but cheaper
+        self.logger.record(
+            "train/explained_variance", explained_variance(buffer.values.flatten(), buffer.returns.flatten())
+        )
+        self.logger.record(
+            "train/punishment_explained_variance",
+            _explained_variance(buffer.punishment_values, buffer.punishment_returns),
+        )
         for name, loss in zip(("entropy", "policy", "value", "punishment_value"), losses, strict=True):
             self.logger.record(f"train/{name}_loss", loss)
         self.logger.record("train/interest", _mean(buffer.interests))
