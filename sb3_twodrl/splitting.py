@@ -34,7 +34,7 @@ def split_cost(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np
 
 
 def split_sign(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
-    """The positive part of the reward is ``r_R``, the negative part ``r_P``."""
+    """The positive part of the reward is ``r_R``, the negative part ``r_P`` (``r_R - r`` is exactly that)."""
     reward_r = np.maximum(rewards, 0.0)
     return reward_r, reward_r - rewards
 
