@@ -124,6 +124,7 @@ def test_truncated_by_time_limit():
     assert truncated and not terminated and not info["is_success"]
 
 
+@pytest.mark.filterwarnings("ignore:.*not in the possible render_modes")  # gymnasium warns before we raise
 @pytest.mark.parametrize(
     ("kwargs", "error", "message"),
     [

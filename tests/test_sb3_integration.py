@@ -25,6 +25,7 @@ class CountSteps(BaseCallback):
         return True
 
 
+@pytest.mark.filterwarnings("ignore:rich is experimental")  # tqdm on SB3's progress bar
 def test_dummy_vec_env_callback_and_progress_bar() -> None:
     callback = CountSteps()
     model = TwoDimA2C("MlpPolicy", make_vec_env("CartPole-v1", n_envs=3, seed=0), n_steps=4, seed=0)
