@@ -75,6 +75,11 @@ def make_reward_split(reward_split: str | RewardSplit) -> BatchSplit:
 PYTHON_CHECK_MAX_ENVS = 128
 
 
+def _valid(reward_r: np.ndarray, reward_p: np.ndarray) -> np.ndarray:
+    """Per env: ``r_R`` finite and ``r_P`` finite and >= 0."""
+    return np.isfinite(reward_r) & np.isfinite(reward_p) & (reward_p >= 0.0)
+
+
 def _all_valid(reward_r: np.ndarray, reward_p: np.ndarray) -> bool:
     """Whether every ``r_R`` is finite and every ``r_P`` finite and >= 0.
 
@@ -86,7 +91,7 @@ def _all_valid(reward_r: np.ndarray, reward_p: np.ndarray) -> bool:
     if reward_p.size <= PYTHON_CHECK_MAX_ENVS:
         punishments = reward_p.tolist()
         return min(punishments) >= 0.0 and math.isfinite(sum(reward_r.tolist()) + sum(punishments))
-    return np.count_nonzero(np.isfinite(reward_r) & np.isfinite(reward_p) & (reward_p >= 0.0)) == reward_p.size
+    return np.count_nonzero(_valid(reward_r, reward_p)) == reward_p.size
 
 
 def split_rewards(
@@ -101,7 +106,7 @@ def split_rewards(
     reward_r, reward_p = reward_split(rewards.astype(np.float32, copy=False), infos)
     reward_r, reward_p = reward_r.astype(np.float32, copy=False), reward_p.astype(np.float32, copy=False)
     if not _all_valid(reward_r, reward_p):
-        idx = int(np.flatnonzero(~(np.isfinite(reward_r) & np.isfinite(reward_p) & (reward_p >= 0.0)))[0])
+        idx = int(np.flatnonzero(~_valid(reward_r, reward_p))[0])
         raise ValueError(
             f"reward split gave (r_R, r_P) = ({reward_r[idx]}, {reward_p[idx]}) for env {idx} at timestep {timestep}: "
             "r_R must be finite and the punishment r_P finite and >= 0 (in float32)"
