@@ -127,14 +127,14 @@ class TwoDimActorCriticPolicy(ActorCriticPolicy):
         if self.temperature != "interest":
             return np.full(np.shape(interest), 1.0 / self.temperature, dtype=np.float32)
         interest = np.asarray(interest, dtype=np.float32)
-        inverse = 1.0 / np.minimum(np.maximum(interest, self.min_temperature), self.max_temperature)
+        inverse = np.reciprocal(np.minimum(np.maximum(interest, self.min_temperature), self.max_temperature))
         if not isinstance(self.action_dist, DiagGaussianDistribution):
             inverse *= interest > 0
         return inverse
 
     def tempered_distribution(self, latent_pi: th.Tensor, inverse_temperature: np.ndarray) -> Distribution:
         """Action distribution of eq. 9: preferences times ``1 / T`` (a Gaussian's std times ``T``)."""
-        inverse = th.from_numpy(inverse_temperature[:, None]).to(latent_pi.device)
+        inverse = th.as_tensor(inverse_temperature[:, None], device=latent_pi.device)
         mean_actions = self.action_net(latent_pi)
         if isinstance(self.action_dist, DiagGaussianDistribution):
             return self.action_dist.proba_distribution(mean_actions, self.log_std - th.log(inverse))

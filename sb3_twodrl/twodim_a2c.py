@@ -26,7 +26,7 @@ SelfTwoDimA2C = TypeVar("SelfTwoDimA2C", bound="TwoDimA2C")
 
 
 def _flat(values: th.Tensor) -> np.ndarray:
-    return values.cpu().numpy().flatten()
+    return values.cpu().numpy().ravel()
 
 
 def _mean(values: np.ndarray) -> float:
@@ -197,7 +197,9 @@ class TwoDimA2C(A2C):
         """
         delta_r = rewards + self.gamma * next_critics[0] - critics[0]
         delta_p = punishments + self.punishment_gamma * next_critics[1] - critics[1]
-        return np.where(dones, 0.0, np.abs(delta_r) + np.abs(delta_p))
+        interest = np.abs(delta_r) + np.abs(delta_p)
+        interest[dones] = 0.0
+        return interest
 
     def _interest_at_rollout_start(self) -> np.ndarray:
         """Interest carried over from the previous rollout's last transition, if it led into ``_last_obs``.
@@ -350,7 +352,6 @@ class TwoDimA2C(A2C):
         self, policy_loss: th.Tensor, value_loss: th.Tensor, punishment_value_loss: th.Tensor, entropy_loss: th.Tensor
     ) -> None:
         buffer = self.rollout_buffer
-        losses = th.stack([entropy_loss, policy_loss, value_loss, punishment_value_loss]).tolist()
         self.logger.record("train/n_updates", self._n_updates, exclude="tensorboard")
         # A2C's own key as A2C computes it; the punishment critic's the same, but cheaper
         self.logger.record(
@@ -360,8 +361,10 @@ class TwoDimA2C(A2C):
             "train/punishment_explained_variance",
             _explained_variance(buffer.punishment_values, buffer.punishment_returns),
         )
-        for name, loss in zip(("entropy", "policy", "value", "punishment_value"), losses, strict=True):
-            self.logger.record(f"train/{name}_loss", loss)
+        self.logger.record("train/entropy_loss", entropy_loss.item())
+        self.logger.record("train/policy_loss", policy_loss.item())
+        self.logger.record("train/value_loss", value_loss.item())
+        self.logger.record("train/punishment_value_loss", punishment_value_loss.item())
         self.logger.record("train/interest", _mean(buffer.interests))
         self.logger.record("train/utility", _mean(buffer.utilities))
         tempered = buffer.inverse_temperatures[buffer.inverse_temperatures > 0]
