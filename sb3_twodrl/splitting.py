@@ -41,11 +41,11 @@ def split_sign(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np
 
 def split_auto(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
     """Per env: ``info`` if ``info["punishment"]`` exists, else ``cost`` if ``info["cost"]`` exists, else ``sign``."""
-    if all("punishment" in info for info in infos):
-        return split_info(rewards, infos)
     keyed = ["punishment" in info or "cost" in info for info in infos]
     if not any(keyed):
         return split_sign(rewards, infos)
+    if all("punishment" in info for info in infos):
+        return split_info(rewards, infos)
     reward_r, reward_p = split_sign(rewards, infos)
     for idx in np.flatnonzero(keyed):
         split = split_info if "punishment" in infos[idx] else split_cost
