@@ -134,7 +134,7 @@ class TwoDimActorCriticPolicy(ActorCriticPolicy):
 
     def tempered_distribution(self, latent_pi: th.Tensor, inverse_temperature: np.ndarray) -> Distribution:
         """Action distribution of eq. 9: preferences times ``1 / T`` (a Gaussian's std times ``T``)."""
-        inverse = th.as_tensor(inverse_temperature[:, None], device=latent_pi.device)
+        inverse = th.from_numpy(inverse_temperature[:, None]).to(latent_pi.device)
         mean_actions = self.action_net(latent_pi)
         if isinstance(self.action_dist, DiagGaussianDistribution):
             return self.action_dist.proba_distribution(mean_actions, self.log_std - th.log(inverse))
