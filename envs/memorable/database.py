@@ -259,8 +259,7 @@ def record_database(
     for cell in iterator:
         exact = np.repeat(core.ranges[cell : cell + 1], k, axis=0)
         if noise is not None:
-            keys = rng.integers(0, 2**63, size=k, dtype=np.uint64)
-            exact = noise.apply(exact, keys, np.zeros(k, dtype=np.int64))
+            exact = noise.sample(exact, rng)
         rows.append(np.clip(exact, LOW_CM, HIGH_CM))
     recording = {
         "source": "simulated",

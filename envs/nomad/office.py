@@ -38,8 +38,8 @@ class OfficeCore:
 
     ``ranges`` ``(n_cells, 32)`` are the exact sensor ranges (cm) of every free lattice cell and
     ``readings`` their normalised, saturated values; ``route_code`` (0 none, 1 shortcut, 2 detour)
-    and ``goal`` label cells. A sensor database (MEMORABLE) samples noisy readings per cell with
-    :func:`envs.nomad.sensors.realistic_readings` at ``lattice.cells``.
+    and ``goal`` label cells. A sensor database (MEMORABLE) records noisy readings per cell with
+    :meth:`envs.nomad.sensors.NoiseModel.sample` of ``ranges``.
     """
 
     office: OfficeMap

@@ -134,10 +134,14 @@ class NoiseModel:
         np.copyto(noisy[:, :N_SONAR], SONAR_MAX_CM, where=lanes[..., 0] < round(self.dropout * 65536))
         return noisy
 
+    def sample(self, ranges_cm: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """Independent noisy ranges ``(n, 32)`` in cm: each row the first step of a fresh episode key from ``rng``."""
+        keys = rng.integers(0, 2**63, size=len(ranges_cm), dtype=np.uint64)
+        return self.apply(ranges_cm, keys, np.zeros(len(ranges_cm), dtype=np.int64))
+
 
 def realistic_readings(
     office: OfficeMap, positions: np.ndarray, noise: NoiseModel, rng: np.random.Generator
 ) -> np.ndarray:
-    """Normalised noisy readings ``(n, 32)`` at arbitrary poses, e.g. K recordings per cell for a database."""
-    keys = rng.integers(0, 2**63, size=len(positions), dtype=np.uint64)
-    return normalise(noise.apply(exact_ranges(office, positions), keys, np.zeros(len(positions), dtype=np.int64)))
+    """Normalised noisy readings ``(n, 32)`` at arbitrary poses (ray cast, then :meth:`NoiseModel.sample`)."""
+    return normalise(noise.sample(exact_ranges(office, positions), rng))
