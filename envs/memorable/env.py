@@ -14,9 +14,10 @@ from typing import Any
 
 import numpy as np
 
+from envs import MAX_EPISODE_STEPS
 from envs.memorable.database import SensorDatabase, load_database
 from envs.nomad import sensors
-from envs.nomad.batched import BatchedNomadOffice, SB3VecEnvAdapter
+from envs.nomad.batched import BatchedNomadOffice, SB3VecEnvAdapter, make_sb3_vec_env
 from envs.nomad.office import NomadOfficeEnv, OfficeCore
 
 
@@ -85,10 +86,9 @@ class BatchedNomadOfficeMemorable(BatchedNomadOffice):
         *,
         database: str | Path | SensorDatabase | None = None,
         observe_odometry: bool = True,
-        max_episode_steps: int | None = None,
+        max_episode_steps: int = MAX_EPISODE_STEPS,
     ) -> None:
-        kwargs: dict[str, Any] = {} if max_episode_steps is None else {"max_episode_steps": max_episode_steps}
-        super().__init__(num_envs, map, observe_odometry=observe_odometry, **kwargs)
+        super().__init__(num_envs, map, observe_odometry=observe_odometry, max_episode_steps=max_episode_steps)
         self.replay = _Replay(self.core, database)
         self._moves = self.replay.moves
 
@@ -101,6 +101,4 @@ class BatchedNomadOfficeMemorable(BatchedNomadOffice):
 
 def make_memorable_vec_env(n_envs: int, seed: int | None = None, **kwargs: Any) -> SB3VecEnvAdapter:
     """An SB3 ``VecEnv`` of ``n_envs`` batched ``NomadOfficeMemorable-v0`` robots."""
-    venv = SB3VecEnvAdapter(BatchedNomadOfficeMemorable(n_envs, **kwargs))
-    venv.seed(seed)
-    return venv
+    return make_sb3_vec_env(n_envs, seed, batch_class=BatchedNomadOfficeMemorable, **kwargs)

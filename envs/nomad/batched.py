@@ -201,8 +201,10 @@ class SB3VecEnvAdapter(VecEnv):
         return [False] * len(self._get_indices(indices))
 
 
-def make_sb3_vec_env(n_envs: int, seed: int | None = None, **kwargs: Any) -> SB3VecEnvAdapter:
-    """An SB3 ``VecEnv`` of ``n_envs`` batched ``NomadOffice-v0`` robots (kwargs go to the batch)."""
-    venv = SB3VecEnvAdapter(BatchedNomadOffice(n_envs, **kwargs))
+def make_sb3_vec_env(
+    n_envs: int, seed: int | None = None, batch_class: type[BatchedNomadOffice] = BatchedNomadOffice, **kwargs: Any
+) -> SB3VecEnvAdapter:
+    """An SB3 ``VecEnv`` of ``n_envs`` batched ``NomadOffice-v0`` robots (kwargs go to ``batch_class``)."""
+    venv = SB3VecEnvAdapter(batch_class(n_envs, **kwargs))
     venv.seed(seed)
     return venv
