@@ -76,7 +76,7 @@ def make_figures(df: pd.DataFrame, out_dir: str | Path, title: str = "") -> list
         if metric == "shortcut_share":
             ax.axhline(0.5, color="grey", linewidth=0.8, linestyle="--")
         if ylim is not None:
-            ax.set_ylim(-0.02, 1.02)
+            ax.set_ylim(ylim[0] - 0.02, ylim[1] + 0.02)
         ax.set_xlabel("epoch")
         ax.set_ylabel(ylabel)
         ax.set_title(title, fontsize=9)
