@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from envs.nomad import sensors
-from envs.nomad.geometry import ROBOT_RADIUS_CM, STEP_CM, OfficeMap
+from envs.nomad.geometry import ROBOT_RADIUS_CM, STEP_CM, OfficeMap, map_source
 from envs.nomad.office import OfficeCore, office_core
 from envs.nomad.sensors import HIGH_CM, LOW_CM
 
@@ -36,9 +36,14 @@ def _xy(xy: Any) -> str:
     return f"({float(xy[0])}, {float(xy[1])})"
 
 
-def default_database_path() -> Path:
-    """The database shipped with the package (office map, realistic sensor model, K = 8)."""
-    return Path(__file__).with_name("data") / "office_k8.npz"
+def default_database_path(map: str | Path | None = None) -> Path:
+    """The database shipped for a shipped map (realistic sensor model, K = 8); others get the office's.
+
+    ``map`` as :func:`envs.nomad.geometry.map_source` takes it: ``None``/``"office"`` is the default
+    office (``office_k8.npz``), ``"open"`` the issue-4 office (``open_k8.npz``).
+    """
+    name = "open" if map_source(map) == map_source("open") else "office"
+    return Path(__file__).with_name("data") / f"{name}_k8.npz"
 
 
 def _floats(value: Any) -> Any:
@@ -182,13 +187,13 @@ def _validate(cells: np.ndarray, counts: np.ndarray, ranges: np.ndarray, name: s
 
 
 def load_database(path: str | Path | None = None, core: OfficeCore | None = None) -> SensorDatabase:
-    """Read a database file strictly; ``None`` is the shipped one. With ``core``, also check the map.
+    """Read a database file strictly; ``None`` is the one shipped for ``core``'s map. With ``core``, also check the map.
 
     Raises ``ValueError`` naming the file for a missing, truncated or corrupted file, a wrong
     format or schema version, missing or malformed arrays, non-finite or out-of-range readings,
     and (with ``core``) a map or lattice that differs from the environment's.
     """
-    path = default_database_path() if path is None else Path(path)
+    path = default_database_path(None if core is None else core.office.source) if path is None else Path(path)
     name = str(path)
     if not path.is_file():
         raise ValueError(f"database file {name} does not exist")

@@ -45,9 +45,13 @@ def _in_rect(rect: tuple[float, float, float, float], xy: np.ndarray) -> np.ndar
     return (xy[..., 0] >= x0) & (xy[..., 0] <= x1) & (xy[..., 1] >= y0) & (xy[..., 1] <= y1)
 
 
+MAPS_DIR = Path(__file__).with_name("maps")
+SHIPPED_MAPS = ("office", "open")  # map="office" (the default, issue 15) or map="open" (the issue-4 office)
+
+
 def default_map_path() -> Path:
-    """The office shipped with the package."""
-    return Path(__file__).with_name("maps") / "office.json"
+    """The office shipped with the package (``map=None`` or ``map="office"``)."""
+    return MAPS_DIR / "office.json"
 
 
 def _number_list(value: object, length: int, what: str, source: str) -> tuple[float, ...]:
@@ -60,14 +64,19 @@ def _number_list(value: object, length: int, what: str, source: str) -> tuple[fl
 
 
 def map_source(path: str | Path | None = None) -> str:
-    """The resolved path of a map file; ``None`` is the shipped office."""
+    """The resolved path of a map file; ``None`` is the shipped office, a name in ``SHIPPED_MAPS`` a shipped map."""
     if path is not None and not isinstance(path, str | Path):
         raise TypeError(f"map must be a path (str or pathlib.Path) or None, got {type(path).__name__}: {path!r}")
-    return str((default_map_path() if path is None else Path(path)).resolve())
+    if path is None:
+        path = default_map_path()
+    elif isinstance(path, str) and path in SHIPPED_MAPS:
+        path = MAPS_DIR / f"{path}.json"
+    return str(Path(path).resolve())
 
 
 def load_map(path: str | Path | None = None) -> OfficeMap:
-    """Read and validate a map file (format documented in ``docs/nomad.md``); ``None`` loads the office.
+    """Read and validate a map file (format documented in ``docs/nomad.md``); ``None`` loads the office,
+    ``"office"`` / ``"open"`` a shipped map by name.
 
     Raises ``ValueError`` naming the file and the offending entry.
     """
