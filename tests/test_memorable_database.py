@@ -140,7 +140,7 @@ def _other_map(tmp_path: Path, move_block_cm: float = 0.0, reformat: bool = Fals
 
 def test_map_mismatch(saved, tmp_path):
     core = office_core(_other_map(tmp_path, move_block_cm=10.0))
-    with pytest.raises(ValueError, match=r"db\.npz: recorded in map 'nomad-office' .*office2\.json has sha256"):
+    with pytest.raises(ValueError, match=r"db\.npz: recorded in map 'nomad-office-dilemma' .*office2\.json has sha256"):
         load_database(saved, core)
 
 
@@ -170,10 +170,10 @@ def test_csv_import_tiny_log(tmp_path):
     core = office_core()
     log = _write_csv(
         tmp_path / "log.csv",
-        [_row(90, 60, 100), _row(91.5, 59, 120.5), _row(100, 60, 200, 12.5), _row(90, 70)],
+        [_row(60, 85, 100), _row(61.5, 84, 120.5), _row(70, 85, 200, 12.5), _row(60, 95)],
     )
     db = import_csv(log, require_all_cells=False)
-    start, east, north = core.start_cell, core.lattice.index((100, 60)), core.lattice.index((90, 70))
+    start, east, north = core.start_cell, core.lattice.index((70, 85)), core.lattice.index((60, 95))
     assert db.counts.sum() == 4 and db.counts[start] == 2 and db.counts[east] == 1 and db.counts[north] == 1
     assert np.array_equal(db.cell_readings(start)[:, 0], [100.0, 120.5])
     assert np.array_equal(db.cell_readings(east)[0], [200.0] * 16 + [12.5] * 16)
@@ -183,19 +183,19 @@ def test_csv_import_tiny_log(tmp_path):
 
 
 def test_csv_requires_all_reachable_cells_by_default(tmp_path):
-    log = _write_csv(tmp_path / "few.csv", [_row(90, 60)])
-    with pytest.raises(ValueError, match=r"few\.csv: 366 reachable cells have no readings"):
+    log = _write_csv(tmp_path / "few.csv", [_row(60, 85)])
+    with pytest.raises(ValueError, match=r"few\.csv: 339 reachable cells have no readings"):
         import_csv(log)
 
 
 @pytest.mark.parametrize(
     ("row", "message"),
     [
-        (_row(500, 60), r"line 2: position \(500.0, 60.0\) is off the map"),
-        (_row(95, 60), r"line 2: position \(95.0, 60.0\) is off the 10 cm lattice"),
-        (_row(170, 110), r"line 2: position \(170.0, 110.0\) .* is not free space"),
-        (_row(90, 60, 700), r"line 2: sonar_0 = 700.0 is outside"),
-        (_row(90, 60, float("nan")), r"line 2: non-finite value"),
+        (_row(500, 85), r"line 2: position \(500.0, 85.0\) is off the map"),
+        (_row(65, 85), r"line 2: position \(65.0, 85.0\) is off the 10 cm lattice"),
+        (_row(170, 115), r"line 2: position \(170.0, 115.0\) .* is not free space"),
+        (_row(60, 85, 700), r"line 2: sonar_0 = 700.0 is outside"),
+        (_row(60, 85, float("nan")), r"line 2: non-finite value"),
     ],
 )
 def test_csv_errors(tmp_path, row, message):

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-import envs  # noqa: F401  (registers the IDs)
+from envs import MAX_EPISODE_STEPS
 from envs.memorable.database import SensorDatabase, record_database
 from envs.memorable.env import BatchedNomadOfficeMemorable, NomadOfficeMemorableEnv, make_memorable_vec_env
 from envs.nomad.office import office_core
@@ -32,7 +32,7 @@ def _rollout(env, actions, seed):
 def test_check_env_and_registration():
     env = gym.make("envs:NomadOfficeMemorable-v0")
     check_env(env.unwrapped, skip_render_check=True)
-    assert env.spec.max_episode_steps == 200
+    assert env.spec.max_episode_steps == MAX_EPISODE_STEPS
     assert env.observation_space.shape == (34,)
     check_env(NomadOfficeMemorableEnv(observe_odometry=False), skip_render_check=True)
 
@@ -85,7 +85,7 @@ def test_seeded_determinism():
 
 def test_unrecorded_cells_are_obstacles(ideal_db):
     core = office_core()
-    east = core.lattice.index((100.0, 60.0))
+    east = core.lattice.index((70.0, 85.0))
     counts = ideal_db.counts.copy()
     counts[east] = 0
     keep = np.repeat(counts > 0, ideal_db.counts)
@@ -98,7 +98,7 @@ def test_unrecorded_cells_are_obstacles(ideal_db):
     _, reward, term, _, info = env.step(0)  # north: recorded
     assert not term and reward == pytest.approx(-0.01)
     with pytest.raises(ValueError, match="not a recorded lattice cell"):
-        env.reset(options={"position": (100.0, 60.0)})
+        env.reset(options={"position": (70.0, 85.0)})
 
 
 def test_batched_matches_single_envs():

@@ -6,12 +6,12 @@ import pytest
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
-import envs  # noqa: F401  (registers the IDs)
+from envs import MAX_EPISODE_STEPS
 
 IDS = ["envs:NomadOffice-v0", "envs:NomadOfficeReal-v0"]
 N, E, S, W = 0, 1, 2, 3
-SHORTCUT = [E] * 16
-DETOUR = [N] * 10 + [E] * 16 + [S] * 7
+SHORTCUT = [S] + [E] * 16  # from (60, 85) to the bent passage's junction row y = 75, then east through it
+DETOUR = [N] * 11 + [E] * 16  # north to the corridor row y = 195, east over the partition
 
 
 @pytest.mark.parametrize("env_id", IDS)
@@ -43,29 +43,32 @@ def test_scripted_routes_reach_goal(actions, route):
     assert rewards[:-1] == [-0.01] * (len(actions) - 1)
     assert rewards[-1] == pytest.approx(4.99)
     assert all(r == (5.0 if i["is_success"] else 0.0) - i["punishment"] for r, i in zip(rewards, infos, strict=True))
-    assert infos[-1]["position_cm"][0] == 250.0
-    assert len(SHORTCUT) <= 0.6 * len(DETOUR)
+    assert infos[-1]["position_cm"][0] == 220.0
+    assert len(SHORTCUT) <= 0.65 * len(DETOUR)
 
 
-def test_route_label_follows_last_passage():
+def test_route_label_is_the_route_taken_to_the_goal():
     env = gym.make("envs:NomadOffice-v0")
     env.reset(seed=0)
-    _, infos, _ = run(env, [N] * 4 + [S] * 4 + [E] * 6)
-    assert infos[0]["route"] is None
-    assert infos[3]["route"] == "detour"
-    assert infos[-1]["route"] == "shortcut"
+    # up into the corridor beside the start room: not yet the detour
+    _, infos, _ = run(env, [N] * 11)
+    assert all(info["route"] is None for info in infos)
+    # east over the partition (the detour), then back, down and through the bent passage
+    _, infos, terminated = run(env, [E] * 7 + [W] * 7 + [S] * 12 + [E] * 16)
+    assert infos[6]["route"] == "detour"
+    assert terminated and infos[-1]["is_success"] and infos[-1]["route"] == "shortcut"
 
 
 def test_collision_into_wall_and_one_cm_clearance_along_wall():
     env = gym.make("envs:NomadOffice-v0")
-    env.reset(options={"position": (90.0, 40.0)})
+    env.reset(options={"position": (60.0, 40.0)})
     _, reward, terminated, _, info = env.step(S)  # centre would be 30 cm from the floor: touching
     assert terminated and info["collision"] and info["punishment"] == 1.0 and reward == -1.0
-    assert info["position_cm"] == (90.0, 40.0) and not info["is_success"]
-    env.reset(options={"position": (90.0, 31.0)})  # 1 cm clearance above the floor
+    assert info["position_cm"] == (60.0, 40.0) and not info["is_success"]
+    env.reset(options={"position": (60.0, 31.0)})  # 1 cm clearance above the floor
     _, infos, terminated = run(env, [E, E, W])
     assert not terminated and not any(i["collision"] for i in infos)
-    assert infos[-1]["position_cm"] == pytest.approx((100.0, 31.0))
+    assert infos[-1]["position_cm"] == pytest.approx((70.0, 31.0))
 
 
 @pytest.mark.parametrize("position", [(170.0, 110.0), (90.0, 20.0), (-50.0, 60.0), (90.0, 400.0), (1, 2, 3), "x"])
@@ -79,8 +82,8 @@ def test_reset_position_on_lattice_matches_walking_there():
     env = gym.make("envs:NomadOffice-v0")
     env.reset(seed=0)
     walked, *_ = env.step(E)
-    placed, info = env.reset(options={"position": (100.0, 60.0)})
-    assert info["position_cm"] == (100.0, 60.0)
+    placed, info = env.reset(options={"position": (70.0, 85.0)})
+    assert info["position_cm"] == (70.0, 85.0)
     np.testing.assert_array_equal(walked, placed)
 
 
@@ -110,8 +113,8 @@ def test_real_model_is_noisy_and_slips():
     env = gym.make("envs:NomadOfficeReal-v0")
     obs0, _ = env.reset(seed=1)
     _, _, _, _, info = env.step(E)
-    assert info["position_cm"] != (100.0, 60.0)
-    assert obs0[-2:] == pytest.approx(np.array([90 / 330, 60 / 245]))  # odometry is dead reckoning
+    assert info["position_cm"] != (70.0, 85.0)
+    assert obs0[-2:] == pytest.approx(np.array([60 / 290, 85 / 305]))  # odometry is dead reckoning
     ideal, _ = gym.make("envs:NomadOffice-v0").reset(seed=1)
     assert not np.array_equal(obs0[:32], ideal[:32])
 
@@ -119,7 +122,7 @@ def test_real_model_is_noisy_and_slips():
 def test_truncated_by_time_limit():
     env = gym.make("envs:NomadOffice-v0")
     env.reset(seed=0)
-    for t in range(200):
+    for t in range(MAX_EPISODE_STEPS):
         *_, terminated, truncated, info = env.step(E if t % 2 == 0 else W)
     assert truncated and not terminated and not info["is_success"]
 
@@ -147,7 +150,7 @@ def test_bad_action_and_options():
     with pytest.raises(ValueError, match="action"):
         env.step(4)
     with pytest.raises(ValueError, match="options"):
-        env.reset(options={"pos": (90, 60)})
+        env.reset(options={"pos": (60, 85)})
 
 
 def test_render_rgb_array():

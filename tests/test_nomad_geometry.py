@@ -21,26 +21,27 @@ def sensor_at(centre, k):
 
 
 def test_axis_readings_at_start():
-    ranges = exact_ranges(OFFICE, np.array([[90.0, 60.0]]))[0]
-    # sonar 0 north: top wall y=245 from sensor (90, 90); 4 west: x=0 from (60, 60);
-    # 8 south: floor from (90, 30); 12 east: x=330 from (120, 60) (block corner outside the cone)
-    for k, expected in {0: 155.0, 4: 60.0, 8: 30.0, 12: 210.0}.items():
+    ranges = exact_ranges(OFFICE, np.array([[60.0, 85.0]]))[0]
+    # sonar 0 north: top wall y=305 from sensor (60, 115); 4 west: x=0 from (30, 85); 8 south: floor
+    # from (60, 55); 12 east: along the bent passage to x=290 from (90, 85) (its corners outside the cone)
+    for k, expected in {0: 190.0, 4: 30.0, 8: 55.0, 12: 200.0}.items():
         assert ranges[k] == pytest.approx(expected, abs=1.0)
         assert ranges[16 + k] == pytest.approx(expected, abs=1.0)  # IR beam, same axis
     obs = normalise(ranges)
-    assert obs[8] == 0.0  # sonar below 40 cm saturates at its minimum
-    assert obs[16 + 8] == pytest.approx(30 / 40)  # IR within range
-    assert obs[16 + 0] == 1.0  # IR beyond 40 cm saturates
+    assert obs[4] == 0.0  # sonar below 40 cm saturates at its minimum
+    assert obs[16 + 4] == pytest.approx(30 / 40)  # IR within range
+    assert obs[16 + 8] == 1.0  # IR beyond 40 cm saturates
 
 
 def test_oblique_readings_see_block_top_inside_cone():
-    centre = (110.0, 170.0)
+    centre = (110.0, 210.0)
     sx, sy = sensor_at(centre, 10)  # facing south-east (225 degrees counter-clockwise from north)
-    drop = sy - 125.0  # height above the block's top face y = 125, x in [140, 200]
+    drop = sy - 155.0  # height above the partition's top face y = 155, x in [120, 210]
     # nearest cone point is where the cone's south-most edge (22.5 + 11.25 degrees off south) meets the face
     sonar = drop / math.cos(math.radians(45 - 11.25))
     ir = drop / math.cos(math.radians(45))  # beam along the axis
-    assert 140 < sx + drop * math.tan(math.radians(45 - 11.25)) < 200
+    assert 120 < sx + drop * math.tan(math.radians(45 - 11.25)) < 210
+    assert 120 < sx + drop < 210
     ranges = exact_ranges(OFFICE, np.array([centre]))[0]
     assert ranges[10] == pytest.approx(sonar, abs=1.0)
     assert ranges[26] == pytest.approx(ir, abs=1.0)
@@ -48,8 +49,8 @@ def test_oblique_readings_see_block_top_inside_cone():
 
 def test_swept_disc_touching_counts_as_collision():
     walls = OFFICE.walls
-    into_floor = swept_clearance(np.array([[90.0, 40.0]]), np.array([[90.0, 30.0]]), walls)
-    along_floor = swept_clearance(np.array([[90.0, 31.0]]), np.array([[100.0, 31.0]]), walls)
+    into_floor = swept_clearance(np.array([[60.0, 40.0]]), np.array([[60.0, 30.0]]), walls)
+    along_floor = swept_clearance(np.array([[60.0, 31.0]]), np.array([[70.0, 31.0]]), walls)
     assert into_floor[0] <= ROBOT_RADIUS_CM
     assert along_floor[0] == pytest.approx(31.0)
     # a wall tip between the two ends: both end discs clear (30.2 cm), the swept disc does not (29.8 cm)

@@ -71,7 +71,8 @@ def route_length(core: OfficeCore, route: str) -> int:
     return int(d) if np.isfinite(d) else -1
 
 
-def _eps_policy(core: OfficeCore, route: str, eps: float) -> np.ndarray:
+def eps_policy(core: OfficeCore, route: str, eps: float) -> np.ndarray:
+    """Action probabilities ``(n_cells, 4)`` of the eps-follower of ``route``."""
     if not 0.0 <= eps <= 1.0:
         raise ValueError(f"eps must be in [0, 1], got {eps!r}")
     policy = np.full((len(core.lattice.moves), 4), eps / 4)
@@ -79,7 +80,8 @@ def _eps_policy(core: OfficeCore, route: str, eps: float) -> np.ndarray:
     return policy
 
 
-def _wall_avoiding_policy(core: OfficeCore) -> np.ndarray:
+def wall_avoiding_policy(core: OfficeCore) -> np.ndarray:
+    """Action probabilities ``(n_cells, 4)`` of the wall-avoiding walk: uniform over the non-colliding moves."""
     ok = (core.lattice.moves >= 0).astype(np.float64)
     return ok / np.maximum(ok.sum(axis=1, keepdims=True), 1.0)
 
@@ -168,32 +170,31 @@ def measure(core: OfficeCore, time_limit: int, eps_grid: np.ndarray | None = Non
     out: dict[str, float] = {}
     for route in ROUTE_CODES:
         out[f"{route}_moves"] = route_length(core, route)
-        out[f"{route}_exact_return"] = expected_return(core, _eps_policy(core, route, 0.0), time_limit)
+        out[f"{route}_exact_return"] = expected_return(core, eps_policy(core, route, 0.0), time_limit)
     for eps in (0.05, 0.3):
         for route in ROUTE_CODES:
-            policy = _eps_policy(core, route, eps)
+            policy = eps_policy(core, route, eps)
             out[f"{route}_return_eps{eps}"] = expected_return(core, policy, time_limit)
             out[f"{route}_goal_rate_eps{eps}"] = float(goal_probabilities(core, policy, (time_limit,))[time_limit].sum())
     crossover = np.nan
     for eps in eps_grid:
-        diff = [expected_return(core, _eps_policy(core, r, float(eps)), time_limit) for r in ROUTE_CODES]
+        diff = [expected_return(core, eps_policy(core, r, float(eps)), time_limit) for r in ROUTE_CODES]
         if diff[1] >= diff[0]:
             crossover = float(eps)
             break
     out["crossover_eps"] = crossover
-    uniform = np.full((len(core.lattice.moves), 4), 0.25)
-    out["wander_return"] = expected_return(core, uniform, time_limit)
     hazard = collisions_per_step(core, time_limit)
     for route in ROUTE_CODES:
         out[f"{route}_collisions_per_step"] = hazard[route]
-    walk = _wall_avoiding_policy(core)
+    walk = wall_avoiding_policy(core)
+    out["avoider_return"] = expected_return(core, walk, time_limit)
     reached = goal_probabilities(core, walk, (time_limit, 2 * time_limit))
     for limit, tag in ((time_limit, "limit"), (2 * time_limit, "2limit")):
         for route, c in ROUTE_CODES.items():
             out[f"avoider_goal_{route}_{tag}"] = float(reached[limit][c])
         out[f"avoider_goal_{tag}"] = float(reached[limit].sum())
     out["avoider_mean_steps"] = mean_episode_length(core, walk, time_limit)
-    out["random_mean_steps"] = mean_episode_length(core, uniform, time_limit)
+    out["random_mean_steps"] = mean_episode_length(core, np.full((len(walk), 4), 0.25), time_limit)
     return out
 
 
