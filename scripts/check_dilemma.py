@@ -16,9 +16,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a checkout without installing
 
-from envs import MAX_EPISODE_STEPS  # noqa: E402
-from envs.nomad.dilemma import goal_probabilities, measure, properties, wall_avoiding_policy  # noqa: E402
-from envs.nomad.office import office_core  # noqa: E402
+from envs import MAX_EPISODE_STEPS
+from envs.nomad.dilemma import goal_probabilities, measure, properties, wall_avoiding_policy
+from envs.nomad.office import office_core
 
 
 def main(argv: list[str] | None = None) -> dict[str, dict[str, float]]:
@@ -36,7 +36,7 @@ def main(argv: list[str] | None = None) -> dict[str, dict[str, float]]:
     for key in next(iter(results.values())):
         print(f"{key:36s}" + "".join(f"{m[key]:18.4f}" for m in results.values()))
     for prop in ("P1", "P2", "P3", "P4", "P5"):
-        print(f"{prop:36s}" + "".join(f"{str(properties(m)[prop]):>18s}" for m in results.values()))
+        print(f"{prop:36s}" + "".join(f"{properties(m)[prop]!s:>18s}" for m in results.values()))
     for limit in args.limits:
         for name, core in cores.items():
             reached = goal_probabilities(core, wall_avoiding_policy(core), (limit,))[limit]

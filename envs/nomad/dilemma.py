@@ -175,7 +175,8 @@ def measure(core: OfficeCore, time_limit: int, eps_grid: np.ndarray | None = Non
         for route in ROUTE_CODES:
             policy = eps_policy(core, route, eps)
             out[f"{route}_return_eps{eps}"] = expected_return(core, policy, time_limit)
-            out[f"{route}_goal_rate_eps{eps}"] = float(goal_probabilities(core, policy, (time_limit,))[time_limit].sum())
+            reached = goal_probabilities(core, policy, (time_limit,))[time_limit]
+            out[f"{route}_goal_rate_eps{eps}"] = float(reached.sum())
     crossover = np.nan
     for eps in eps_grid:
         diff = [expected_return(core, eps_policy(core, r, float(eps)), time_limit) for r in ROUTE_CODES]
@@ -209,4 +210,3 @@ def properties(m: dict[str, float]) -> dict[str, bool]:
         "P4": m["shortcut_collisions_per_step"] >= 2.0 * m["detour_collisions_per_step"],
         "P5": m["avoider_goal_limit"] >= 0.01 and m["avoider_goal_detour_limit"] >= 0.25 * m["avoider_goal_limit"],
     }
-
