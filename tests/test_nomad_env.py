@@ -159,3 +159,24 @@ def test_render_rgb_array():
     run(env, [N, E, E])
     frame = env.render()
     assert frame.ndim == 3 and frame.shape[2] == 3 and frame.dtype == np.uint8
+
+
+@pytest.mark.parametrize(
+    ("env_id", "kwargs", "start"),
+    [
+        ("envs:NomadOffice-v0", {}, (60.0, 85.0)),
+        ("envs:NomadOffice-v0", {"map": "open"}, (90.0, 60.0)),
+        ("envs:NomadOfficeOpen-v0", {}, (90.0, 60.0)),
+        ("envs:NomadOfficeMemorableOpen-v0", {}, (90.0, 60.0)),  # with the open office's own database
+        ("envs:NomadOfficeMemorable-v0", {"map": "office"}, (60.0, 85.0)),
+    ],
+)
+def test_shipped_maps_by_name_and_id(env_id, kwargs, start):
+    env = gym.make(env_id, **kwargs)
+    _, info = env.reset(seed=0)
+    assert info["position_cm"] == start and env.spec.max_episode_steps == MAX_EPISODE_STEPS
+
+
+def test_unknown_map_name_is_value_error():
+    with pytest.raises(ValueError, match=r"closed.*does not exist"):
+        gym.make("envs:NomadOffice-v0", map="closed")
