@@ -113,3 +113,13 @@ def test_exact_figures_match_walks_of_the_batched_env():
     exact = goal_probabilities(core, walk, (MAX_EPISODE_STEPS,))[MAX_EPISODE_STEPS]
     for label, p in (("shortcut", exact[1]), ("detour", exact[2])):
         assert (goal & (route == label)).mean() == pytest.approx(p, abs=4 * np.sqrt(p * (1 - p) / n))
+
+
+@pytest.mark.parametrize(("kwargs", "message"), [({"time_limit": 0}, "time_limit"), ({"route": "tunnel"}, "route")])
+def test_bad_arguments_are_value_errors(kwargs, message):
+    core = office_core()
+    with pytest.raises(ValueError, match=message):
+        if "route" in kwargs:
+            route_length(core, kwargs["route"])
+        else:
+            measure(core, kwargs["time_limit"])

@@ -165,7 +165,9 @@ def mean_episode_length(core: OfficeCore, policy: np.ndarray, time_limit: int) -
 
 
 def measure(core: OfficeCore, time_limit: int, eps_grid: np.ndarray | None = None) -> dict[str, float]:
-    """The figures of properties P1-P5 (issue 15) for one office."""
+    """The figures of properties P1-P5 (issue 15) for one office, episodes truncated after ``time_limit`` steps."""
+    if isinstance(time_limit, bool) or not isinstance(time_limit, int) or time_limit < 1:
+        raise ValueError(f"time_limit must be a positive int, got {time_limit!r}")
     eps_grid = np.round(np.arange(0.0, 0.51, 0.01), 2) if eps_grid is None else eps_grid
     out: dict[str, float] = {}
     for route in ROUTE_CODES:
