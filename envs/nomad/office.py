@@ -118,8 +118,9 @@ class NomadOfficeEnv(gym.Env):
     (replacing the move cost) and ``0.01`` for every other move, the goal move included. The
     reward is ``r_R - r_P`` (``4.99`` on the goal step) and ``info["punishment"] = r_P``. A
     collision leaves the robot where it was and ends the episode, as does the goal.
-    ``info["route"]`` is the passage the robot's centre entered last (``"shortcut"``/``"detour"``,
-    ``None`` before either); every path from start to goal passes one of them.
+    ``info["route"]`` is the route label region the robot's centre entered last (``"shortcut"``/
+    ``"detour"``, ``None`` before either); every path from start to goal passes one of them, so at
+    the goal it is the route the robot took (the map places them where a robot is committed).
 
     Ideal model (``NomadOffice-v0``): on the lattice, readings and move outcomes are table
     look-ups; ``sensor_noise`` adds per-step noise. Realistic model (``NomadOfficeReal-v0``):
