@@ -3,7 +3,8 @@
 Importing this package registers:
 
 * ``NomadOffice-v0``: the office of paper section 3 with ideal sensors and exact 10 cm moves;
-* ``NomadOfficeReal-v0``: the same office with sensor noise, sonar drop-outs and motion slip;
+* ``NomadOfficeReal-v0``: the same office on a stand-in for the physical robot (``envs.nomad.realistic``:
+  specular sonar, ringing, cross-talk, surface-dependent infrared, drifting odometry);
 * ``NomadOfficeMemorable-v0``: the same task replayed from a recorded sensor database (MEMORABLE).
 
 All are truncated after 200 steps: six times the shortest detour (33 moves), so no sensible
@@ -17,9 +18,8 @@ MAX_EPISODE_STEPS = 200
 register(id="NomadOffice-v0", entry_point="envs.nomad.office:NomadOfficeEnv", max_episode_steps=MAX_EPISODE_STEPS)
 register(
     id="NomadOfficeReal-v0",
-    entry_point="envs.nomad.office:NomadOfficeEnv",
+    entry_point="envs.nomad.realistic:NomadOfficeRealEnv",
     max_episode_steps=MAX_EPISODE_STEPS,
-    kwargs={"sensor_noise": True, "step_sd_cm": 1.0, "slip_sd_cm": 1.0},
 )
 register(
     id="NomadOfficeMemorable-v0",
