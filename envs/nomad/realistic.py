@@ -154,7 +154,7 @@ class RealisticModel:
 
 def _lanes(words: np.ndarray) -> np.ndarray:
     """The four 16-bit lanes ``(..., 4)`` of uint64 hash words, in the same order on every platform."""
-    lanes = words.view(np.uint16).reshape(*words.shape, 4)
+    lanes = np.ascontiguousarray(words).view(np.uint16).reshape(*words.shape, 4)
     return lanes[..., ::-1] if sys.byteorder == "big" else lanes
 
 
@@ -165,6 +165,20 @@ def _gaussians(words: np.ndarray) -> np.ndarray:
 
 def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+
+
+def _corners(walls: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices shared by two walls ``(k, 2)`` and the unit vectors ``(k, 2, 2)`` along both walls from them."""
+    ends = np.concatenate([walls[:, :2], walls[:, 2:]])
+    others = np.concatenate([walls[:, 2:], walls[:, :2]])
+    points, arms = [], []
+    for i in range(len(ends)):
+        same = np.flatnonzero(np.all(np.abs(ends - ends[i]) < 1e-6, axis=1))
+        if len(same) == 2 and same[0] == i:
+            vectors = others[same] - ends[i]
+            points.append(ends[i])
+            arms.append(vectors / np.linalg.norm(vectors, axis=1, keepdims=True))
+    return np.array(points).reshape(-1, 2), np.array(arms).reshape(-1, 2, 2)
 
 
 class Scene:
@@ -194,6 +208,7 @@ class Scene:
         self.ray_dirs = np.stack([np.sin(angles), np.cos(angles)], axis=-1)
         self.axes = np.stack([np.sin(BEARINGS), np.cos(BEARINGS)], axis=1)
         self.cos_half = np.cos(half)
+        self.corners, self.corner_arms = _corners(walls)
 
     # --- tracing --------------------------------------------------------------------------
     def _nearest(self, origins: np.ndarray, dirs: np.ndarray, exclude: np.ndarray | None) -> tuple[np.ndarray, ...]:
@@ -270,12 +285,31 @@ class Scene:
             alive &= path < SONAR_MAX_CM
             exclude = wall
         limit = model.blank_cm
-        own = np.where((own >= limit) & (own <= SONAR_MAX_CM), own, np.inf).min(axis=-1)
+        own = np.minimum(own.min(axis=-1), self._corner_echoes(positions))
+        own = np.where((own >= limit) & (own <= SONAR_MAX_CM), own, np.inf)
         cross_range = np.where((cross_range >= limit) & (cross_range <= SONAR_MAX_CM), cross_range, np.inf)
         crosstalk = np.full((n, N_SONAR), np.inf)
         rows = np.broadcast_to(np.arange(n)[:, None, None], shape)
         np.minimum.at(crosstalk, (rows.ravel(), cross_to.ravel()), cross_range.ravel())
         return own, crosstalk
+
+    def _corner_echoes(self, positions: np.ndarray) -> np.ndarray:
+        """Range ``(n, 16)`` to the nearest visible concave corner inside each sonar beam (a retroreflector)."""
+        n = len(positions)
+        if len(self.corners) == 0:
+            return np.full((n, N_SONAR), np.inf)
+        origin = positions[:, None, :] + ROBOT_RADIUS_CM * self.axes[None]  # (n, 16, 2)
+        vec = self.corners[None, None] - origin[:, :, None, :]  # (n, 16, k, 2)
+        dist = np.linalg.norm(vec, axis=-1)
+        unit = vec / np.maximum(dist, 1e-9)[..., None]
+        in_beam = np.einsum("nskc,sc->nsk", unit, self.axes) >= self.cos_half
+        u1, u2 = self.corner_arms[:, 0], self.corner_arms[:, 1]
+        back = -vec  # from the corner to the sensor
+        turn = _cross(u1, u2)
+        concave = (_cross(u1, back) * turn >= 0) & (_cross(back, u2) * turn >= 0) & (np.abs(turn) > 1e-9)
+        t, _ = self._nearest(origin[:, :, None, :], unit, None)
+        visible = t >= dist - 1e-6
+        return np.where(in_beam & concave & visible, dist, np.inf).min(axis=-1)
 
     def infrared(self, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Axis range ``(n, 16)`` cm from the body surface and relative intensity ``rho cos(theta)`` of each IR beam."""
