@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from envs.nomad.gap import odometry_errors, systematic_difference
+from envs.nomad.gap import k_convergence, odometry_errors, systematic_difference
 from envs.nomad.office import office_core
 from envs.nomad.realistic import RealisticModel
 from envs.nomad.sensors import BEARINGS, N_SONAR, exact_ranges
@@ -70,6 +70,13 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--robots", type=int, default=2000, help="robots for the odometry error (default 2000)")
     parser.add_argument("--map", type=Path, default=None, help="office map JSON (default: the shipped office)")
     parser.add_argument("--figure", type=Path, default=None, help="write the readings figure here (.png)")
+    parser.add_argument(
+        "--k-sweep",
+        type=int,
+        default=0,
+        help="also compare K = 1, 2, 4, 8, 16 recorded readings per "
+        "cell with this many (e.g. 64): how many a database needs",
+    )
     args = parser.parse_args(argv)
     model = RealisticModel()
     core = office_core(args.map)
@@ -87,6 +94,13 @@ def main(argv: list[str] | None = None) -> None:
             print(
                 f"odometry error after {n} {'straight' if straight else 'random'} moves ({args.robots} robots): "
                 f"median {np.median(e):.1f} cm, mean {e.mean():.1f} cm, 95th percentile {np.percentile(e, 95):.1f} cm"
+            )
+    if args.k_sweep:
+        shares = k_convergence(core, model, (1, 2, 4, 8, 16), args.k_sweep, args.seed)
+        for k, share in shares.items():
+            print(
+                f"K = {k:2d}: median of K readings differs > 50 cm from the median of {args.k_sweep}: "
+                f"{100 * share:.1f}% of (cell, sonar)"
             )
     if args.figure is not None:
         figure(args.figure, args.map, model, args.seed)

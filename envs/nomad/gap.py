@@ -46,3 +46,18 @@ def odometry_errors(model: RealisticModel, moves: int, robots: int, seed: int, s
         error += model.displacement(actions, keys, np.full(robots, step)) - MOVES_CM[actions]
         out[step - 1] = np.linalg.norm(error, axis=1)
     return out
+
+
+def k_convergence(core: OfficeCore, model: RealisticModel, ks: tuple[int, ...], reference: int, seed: int) -> dict:
+    """How many recorded readings per cell (K) a database needs to show a cell's typical sonar reading.
+
+    Records ``reference`` tours by dead reckoning (:func:`envs.memorable.recording.drive_and_record`)
+    and returns, per ``K`` in ``ks``, the share of (reachable cell, sonar) pairs whose median over the
+    first ``K`` readings differs by more than 50 cm from the median over all ``reference`` readings.
+    """
+    from envs.memorable.recording import drive_and_record
+
+    counts, per_cell, _ = drive_and_record(core, model, reference, seed)
+    cells = [r[:, :16] for r, c in zip(per_cell, counts, strict=True) if c >= reference]
+    full = np.stack([np.median(r, axis=0) for r in cells])
+    return {k: float(np.mean(np.abs(np.stack([np.median(r[:k], axis=0) for r in cells]) - full) > 50)) for k in ks}

@@ -26,6 +26,7 @@ materials).
 
 from __future__ import annotations
 
+import json
 import sys
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -122,8 +123,8 @@ class RealisticModel:
             raise ValueError("RealisticModel.surfaces: the shares must not all be 0")
 
     def describe(self) -> dict[str, Any]:
-        """JSON-able parameters (stored with a recorded database)."""
-        return asdict(self)
+        """Parameters as JSON data (stored with a recorded database; tuples become lists)."""
+        return json.loads(json.dumps(asdict(self)))
 
     # --- geometry -----------------------------------------------------------------------
     def scene(self, office: OfficeMap) -> Scene:
