@@ -221,3 +221,39 @@ def test_bad_parameters_are_named(kwargs, name):
 def test_real_env_rejects_a_model_of_the_wrong_type():
     with pytest.raises(TypeError, match="model"):
         gym.make("envs:NomadOfficeReal-v0", model="realistic")
+
+
+def test_batched_real_env_equals_single_envs():
+    from envs.nomad.realistic_batched import BatchedNomadOfficeReal
+
+    n, steps = 3, 260
+    batched = BatchedNomadOfficeReal(n)
+    singles = [gym.make("envs:NomadOfficeReal-v0") for _ in range(n)]
+    obs_b, _ = batched.reset(seed=10)
+    obs_s = [env.reset(seed=10 + i)[0] for i, env in enumerate(singles)]
+    np.testing.assert_array_equal(obs_b, np.stack(obs_s))
+    rng = np.random.default_rng(0)
+    ends = 0
+    for _ in range(steps):
+        actions = rng.choice(4, n, p=[0.2, 0.5, 0.2, 0.1])
+        obs_b, rew_b, term_b, trunc_b, info_b = batched.step(actions)
+        for i, env in enumerate(singles):
+            obs, reward, terminated, truncated, info = env.step(int(actions[i]))
+            assert (reward, terminated, truncated) == (rew_b[i], term_b[i], trunc_b[i])
+            assert info["position_cm"] == tuple(info_b["position_cm"][i]) and info["route"] == info_b["route"][i]
+            if terminated or truncated:
+                np.testing.assert_array_equal(info_b["final_obs"][i], obs)
+                obs, _ = env.reset()
+                ends += 1
+            np.testing.assert_array_equal(obs_b[i], obs)
+    assert ends >= 3
+
+
+def test_batched_real_env_trains_with_sb3():
+    from stable_baselines3 import A2C
+
+    from envs.nomad.realistic_batched import make_real_vec_env
+
+    venv = make_real_vec_env(4, seed=0, observe_odometry=False)
+    assert venv.observation_space.shape == (32,)
+    A2C("MlpPolicy", venv, n_steps=5, seed=0, device="cpu").learn(40)
