@@ -210,22 +210,30 @@ class Scene:
         self.axes = np.stack([np.sin(BEARINGS), np.cos(BEARINGS)], axis=1)
         self.cos_half = np.cos(half)
         self.corners, self.corner_arms = _corners(walls)
+        self._cross_ae = _cross(self.a, self.e)
 
     # --- tracing --------------------------------------------------------------------------
     def _nearest(self, origins: np.ndarray, dirs: np.ndarray, exclude: np.ndarray | None) -> tuple[np.ndarray, ...]:
-        """Nearest wall hit ``(t, wall)`` of rays ``(..., 2)``; ``t = inf`` where none."""
-        rel = self.a - origins[..., None, :]
-        d = dirs[..., None, :]
-        denom = _cross(d, self.e)
+        """Nearest wall hit ``(t, wall)`` of rays ``(..., 2)``; ``t = inf`` where none.
+
+        Written as contiguous ``(rays, walls)`` products of per-ray and per-wall terms (the cross
+        products expand into them), elementwise so that any batch size gives the same bits.
+        """
+        shape = np.broadcast_shapes(origins.shape, dirs.shape)[:-1]
+        o = np.broadcast_to(origins, (*shape, 2)).reshape(-1, 2)
+        d = np.broadcast_to(dirs, (*shape, 2)).reshape(-1, 2)
+        ox, oy, dx, dy = o[:, :1], o[:, 1:], d[:, :1], d[:, 1:]
+        ex, ey, ax, ay = self.e[:, 0], self.e[:, 1], self.a[:, 0], self.a[:, 1]
+        denom = dx * ey - dy * ex  # cross(d, e)
         with np.errstate(divide="ignore", invalid="ignore"):
-            t = _cross(rel, self.e) / denom
-            s = _cross(rel, d) / denom
+            t = (self._cross_ae - (ox * ey - oy * ex)) / denom  # cross(a - o, e) / cross(d, e)
+            s = (ax * dy - ay * dx - (ox * dy - oy * dx)) / denom  # cross(a - o, d) / cross(d, e)
         hit = (denom != 0) & (t > 1e-9) & (s >= 0) & (s <= 1)
         if exclude is not None:
-            hit &= np.arange(len(self.a)) != exclude[..., None]
+            hit &= np.arange(len(self.a)) != exclude.reshape(-1, 1)
         t = np.where(hit, t, np.inf)
         wall = np.argmin(t, axis=-1)
-        return np.take_along_axis(t, wall[..., None], axis=-1)[..., 0], wall
+        return t[np.arange(len(t)), wall].reshape(shape), wall.reshape(shape)
 
     def echoes(self, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Deterministic sonar echoes at robot centres ``(n, 2)``: ``(own, crosstalk)``, each ``(n, 16)`` cm.
