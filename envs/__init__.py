@@ -4,7 +4,8 @@ Importing this package registers:
 
 * ``NomadOffice-v0``: the office of paper section 3 with ideal sensors and exact 10 cm moves;
 * ``NomadOfficeReal-v0``: the same office on a stand-in for the physical robot (``envs.nomad.realistic``:
-  specular sonar, ringing, cross-talk, surface-dependent infrared, drifting odometry);
+  specular sonar, ringing, cross-talk, surface-dependent infrared, drifting odometry; its batched
+  env is its ``vector_entry_point``: ``gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point")``);
 * ``NomadOfficeMemorable-v0``: the same task replayed from a recorded sensor database (MEMORABLE).
 
 All are truncated after 200 steps: six times the shortest detour (33 moves), so no sensible
@@ -19,6 +20,7 @@ register(id="NomadOffice-v0", entry_point="envs.nomad.office:NomadOfficeEnv", ma
 register(
     id="NomadOfficeReal-v0",
     entry_point="envs.nomad.realistic:NomadOfficeRealEnv",
+    vector_entry_point="envs.nomad.realistic_batched:BatchedNomadOfficeReal",
     max_episode_steps=MAX_EPISODE_STEPS,
 )
 register(

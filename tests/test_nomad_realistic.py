@@ -144,15 +144,37 @@ def test_drift_grows_with_the_number_of_moves():
     assert errors[50] > 2.0 * errors[5]
 
 
-def test_real_env_odometry_is_dead_reckoning_and_drifts():
-    env = gym.make("envs:NomadOfficeReal-v0")
+def test_real_env_odometry_is_dead_reckoning_and_drifts(tmp_path):
+    office_with(tmp_path, [[0, 0, 1000, 0], [1000, 0, 1000, 1000], [1000, 1000, 0, 1000], [0, 1000, 0, 0]])
+    env = gym.make("envs:NomadOfficeReal-v0", map=tmp_path / "room.json")
     obs, info = env.reset(seed=0)
-    for _ in range(12):
-        obs, _, terminated, _, info = env.step(1)  # east along the shortcut
+    for _ in range(30):
+        obs, _, terminated, _, info = env.step(1)  # east through an empty room
         assert not terminated
-    odometry = obs[-2:] * np.array([330.0, 245.0])
-    np.testing.assert_allclose(odometry, (90.0 + 120.0, 60.0), atol=1e-4)
+    odometry = obs[-2:] * 1000.0
+    np.testing.assert_allclose(odometry, (500.0 + 300.0, 500.0), atol=1e-3)
     assert np.linalg.norm(np.array(info["position_cm"]) - odometry) > 0.5
+
+
+def test_gap_is_systematic_and_straight_runs_drift_more():
+    from envs.nomad.gap import odometry_errors, systematic_difference
+
+    core = office_core()
+    diff = systematic_difference(core, RealisticModel(), draws=3, seed=0)
+    assert diff.shape == (int(core.lattice.reachable.sum()), 32)
+    assert np.mean(diff[:, :16] > 50) > 0.2
+    exact = systematic_difference(core, RealisticModel(beam_half_angle_deg=11.25, **EXACT), draws=1, seed=0)
+    assert np.mean(exact[:, :16] > 50) > 0.2  # not the noise: the geometry
+    straight = odometry_errors(RealisticModel(), 50, 500, 0, straight=True)
+    random = odometry_errors(RealisticModel(), 50, 500, 0)
+    assert np.median(straight[49]) > np.median(random[49]) > np.median(random[4])
+
+
+def test_vector_entry_point_is_the_batched_real_env():
+    venv = gym.make_vec("envs:NomadOfficeReal-v0", num_envs=2, vectorization_mode="vector_entry_point")
+    obs, _ = venv.reset(seed=0)
+    single, _ = gym.make("envs:NomadOfficeReal-v0").reset(seed=1)
+    np.testing.assert_array_equal(obs[1], single)
 
 
 def test_seeded_real_env_repeats_exactly():
