@@ -3,7 +3,8 @@
 Prints, per sensor bearing, the share of reachable lattice cells where the realistic reading,
 median over ``--draws`` noise draws, differs from the ideal reading by more than 50 cm (sonar) or
 10 cm (infrared), and the dead-reckoning error after 20 and 50 random moves; ``--figure`` draws
-both models' sonar readings at a few poses.
+both models' sonar readings at three poses (the start, and cells one and two thirds of the
+longest shortest path away from it).
 
     python scripts/sensor_gap.py --draws 7 --seed 0 --figure docs/realistic_readings.png
 """
@@ -15,12 +16,18 @@ from pathlib import Path
 
 import numpy as np
 
+from envs.memorable.recording import shortest_paths
 from envs.nomad.gap import k_convergence, odometry_errors, systematic_difference
 from envs.nomad.office import office_core
 from envs.nomad.realistic import RealisticModel
 from envs.nomad.sensors import BEARINGS, N_SONAR, exact_ranges
 
-POSES = ((90.0, 60.0), (170.0, 50.0), (170.0, 185.0))
+
+def default_poses(core) -> list[tuple[float, float]]:
+    """The start and the first reachable cells one third and two thirds of the farthest path length away."""
+    lengths = np.array([len(p) if core.lattice.reachable[c] else -1 for c, p in enumerate(shortest_paths(core))])
+    picks = [core.start_cell] + [int(np.flatnonzero(lengths == lengths.max() * k // 3)[0]) for k in (1, 2)]
+    return [tuple(float(v) for v in core.lattice.cells[c]) for c in picks]
 
 
 def figure(path: Path, map_path: Path | None, model: RealisticModel, seed: int) -> None:
@@ -33,8 +40,9 @@ def figure(path: Path, map_path: Path | None, model: RealisticModel, seed: int) 
     scene = model.scene(core.office)
     axes_xy = np.stack([np.sin(BEARINGS), np.cos(BEARINGS)], axis=1)
     rng = np.random.default_rng(seed)
-    fig, axes = plt.subplots(1, len(POSES), figsize=(5 * len(POSES), 4.2))
-    for ax, pose in zip(axes, POSES, strict=True):
+    poses = default_poses(core)
+    fig, axes = plt.subplots(1, len(poses), figsize=(5 * len(poses), 4.2))
+    for ax, pose in zip(axes, poses, strict=True):
         xy = np.array([pose])
         ideal = np.clip(exact_ranges(core.office, xy)[0, :N_SONAR], 40, 600)
         for wall in core.office.walls:
