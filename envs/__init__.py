@@ -3,9 +3,11 @@
 Importing this package registers:
 
 * ``NomadOffice-v0``: the office of paper section 3 with ideal sensors and exact 10 cm moves;
-* ``NomadOfficeReal-v0``: the same office with sensor noise, sonar drop-outs and motion slip;
+* ``NomadOfficeReal-v0``: the same office on a stand-in for the physical robot (``envs.nomad.realistic``:
+  specular sonar, ringing, cross-talk, surface-dependent infrared, drifting odometry; its batched
+  env is its ``vector_entry_point``: ``gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point")``);
 * ``NomadOfficeMemorable-v0``: the same task replayed from a recorded sensor database (MEMORABLE);
-* ``NomadOfficeOpen-v0`` / ``NomadOfficeMemorableOpen-v0``: the first two on the issue-4 office
+* ``NomadOfficeOpen-v0`` / ``NomadOfficeRealOpen-v0`` / ``NomadOfficeMemorableOpen-v0``: the three on the issue-4 office
   (``map="open"``, which any of the IDs also takes), kept so results can be shown on both maps.
 
 All are truncated after 300 steps: the shortest the wall-avoiding random walks of property P5
@@ -20,9 +22,9 @@ MAX_EPISODE_STEPS = 300
 register(id="NomadOffice-v0", entry_point="envs.nomad.office:NomadOfficeEnv", max_episode_steps=MAX_EPISODE_STEPS)
 register(
     id="NomadOfficeReal-v0",
-    entry_point="envs.nomad.office:NomadOfficeEnv",
+    entry_point="envs.nomad.realistic:NomadOfficeRealEnv",
+    vector_entry_point="envs.nomad.realistic_batched:BatchedNomadOfficeReal",
     max_episode_steps=MAX_EPISODE_STEPS,
-    kwargs={"sensor_noise": True, "step_sd_cm": 1.0, "slip_sd_cm": 1.0},
 )
 register(
     id="NomadOfficeMemorable-v0",
@@ -32,6 +34,13 @@ register(
 register(
     id="NomadOfficeOpen-v0",
     entry_point="envs.nomad.office:NomadOfficeEnv",
+    max_episode_steps=MAX_EPISODE_STEPS,
+    kwargs={"map": "open"},
+)
+register(
+    id="NomadOfficeRealOpen-v0",
+    entry_point="envs.nomad.realistic:NomadOfficeRealEnv",
+    vector_entry_point="envs.nomad.realistic_batched:BatchedNomadOfficeReal",
     max_episode_steps=MAX_EPISODE_STEPS,
     kwargs={"map": "open"},
 )

@@ -1,4 +1,4 @@
-"""Export a trained policy as a TorchScript module for the robot: readings -> action, no SB3 needed.
+"""Export a trained policy for the robot (TorchScript or ONNX): readings -> action, no SB3 needed.
 
 The module maps a float32 batch of observations ``(n, 34)`` (16 sonar, 16 IR normalised as in
 ``docs/nomad.md``, then odometry x, y in [0, 1]; ``(n, 32)`` for ``observe_odometry=False``) to
@@ -9,7 +9,16 @@ what ``model.predict(obs, deterministic=True)`` returns. On the robot::
     policy = torch.jit.load("policy.pt")
     action = int(policy(torch.as_tensor(obs, dtype=torch.float32)[None])[0])
 
+With ``--format onnx`` (extra ``onnx``: ``pip install -e ".[onnx]"``) the same actor is an ONNX
+graph, input ``obs`` float32 ``(n, obs_dim)``, output ``action`` int64 ``(n,)``; the robot needs
+only onnxruntime::
+
+    import onnxruntime
+    session = onnxruntime.InferenceSession("policy.onnx")
+    action = int(session.run(["action"], {"obs": obs[None].astype("float32")})[0][0])
+
     PYTHONPATH=. python scripts/export_policy.py model.zip policy.pt [--algo a2c]
+    PYTHONPATH=. python scripts/export_policy.py model.zip policy.onnx --format onnx
 """
 
 from __future__ import annotations
@@ -17,6 +26,7 @@ from __future__ import annotations
 import argparse
 import copy
 import json
+import warnings
 from pathlib import Path
 
 import torch as th
@@ -39,32 +49,70 @@ class DeterministicActor(nn.Module):
         return th.argmax(logits, dim=-1)
 
 
-def export_policy(model: BaseAlgorithm, path: str | Path) -> Path:
-    """Write ``model``'s deterministic actor as TorchScript (CPU); returns the path."""
+def _actor(model: BaseAlgorithm) -> DeterministicActor:
     policy = model.policy
     if not isinstance(policy.action_space, spaces.Discrete) or not isinstance(policy.observation_space, spaces.Box):
         raise ValueError("export_policy supports Box observations and Discrete actions only")
     if policy.normalize_images and len(policy.observation_space.shape) == 3:
         raise ValueError("export_policy does not export image preprocessing")
     actor = DeterministicActor(policy.pi_features_extractor, policy.mlp_extractor.policy_net, policy.action_net)
-    actor = actor.to("cpu").eval()
-    scripted = th.jit.script(copy.deepcopy(actor))
-    meta = {
+    return copy.deepcopy(actor).to("cpu").eval()
+
+
+def _meta(model: BaseAlgorithm) -> dict[str, object]:
+    policy = model.policy
+    return {
         "algorithm": type(model).__name__,
         "observation_shape": list(policy.observation_space.shape),
         "actions": ["north", "east", "south", "west"][: int(policy.action_space.n)],
         "input": "float32 (n, obs_dim): 16 sonar (r-40)/560, 16 IR r/40, then odometry scaled by the map bounds",
         "output": "int64 (n,) argmax action (= model.predict(obs, deterministic=True))",
     }
+
+
+def export_policy(model: BaseAlgorithm, path: str | Path) -> Path:
+    """Write ``model``'s deterministic actor as TorchScript (CPU); returns the path."""
+    scripted = th.jit.script(_actor(model))
     path = Path(path)
-    th.jit.save(scripted, str(path), _extra_files={"meta.json": json.dumps(meta)})
+    th.jit.save(scripted, str(path), _extra_files={"meta.json": json.dumps(_meta(model))})
+    return path
+
+
+def export_onnx(model: BaseAlgorithm, path: str | Path, opset: int = 17) -> Path:
+    """Write ``model``'s deterministic actor as ONNX (input ``obs``, output ``action``, batch axis free).
+
+    Uses torch's TorchScript-based exporter (``dynamo=False``): the newer exporter needs the
+    ``onnxscript`` package, which the ``onnx`` extra does not install. The metadata of
+    :func:`export_policy` is stored in the graph's ``metadata_props`` under ``meta.json``.
+    """
+    import onnx
+
+    actor = _actor(model)
+    path = Path(path)
+    example = th.zeros((1, *model.policy.observation_space.shape), dtype=th.float32)
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", category=DeprecationWarning)
+        th.onnx.export(
+            actor,
+            (example,),
+            str(path),
+            dynamo=False,
+            input_names=["obs"],
+            output_names=["action"],
+            dynamic_axes={"obs": {0: "n"}, "action": {0: "n"}},
+            opset_version=opset,
+        )
+    graph = onnx.load(str(path))
+    graph.metadata_props.add(key="meta.json", value=json.dumps(_meta(model)))
+    onnx.save(graph, str(path))
     return path
 
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("model", type=Path, help="saved SB3 model (.zip)")
-    parser.add_argument("out", type=Path, help="TorchScript file to write (.pt)")
+    parser.add_argument("out", type=Path, help="file to write (.pt for TorchScript, .onnx for ONNX)")
+    parser.add_argument("--format", choices=("torchscript", "onnx"), default="torchscript", help="default torchscript")
     parser.add_argument("--algo", choices=("twodim", "a2c"), default="twodim", help="TwoDimA2C (default) or A2C")
     args = parser.parse_args(argv)
     if args.algo == "twodim":
@@ -72,7 +120,8 @@ def main(argv: list[str] | None = None) -> None:
     else:
         from stable_baselines3 import A2C as Algo
     model = Algo.load(args.model, device="cpu")
-    print(f"wrote {export_policy(model, args.out)}")
+    export = export_onnx if args.format == "onnx" else export_policy
+    print(f"wrote {export(model, args.out)}")
 
 
 if __name__ == "__main__":

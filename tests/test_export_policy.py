@@ -12,7 +12,7 @@ from stable_baselines3 import A2C
 
 import envs  # noqa: F401
 from sb3_twodrl import TwoDimA2C
-from scripts.export_policy import export_policy, main
+from scripts.export_policy import export_onnx, export_policy, main
 
 
 @pytest.mark.parametrize("algo", [TwoDimA2C, A2C])
@@ -47,6 +47,50 @@ def test_cli(tmp_path):
         "import sys; sys.modules['stable_baselines3'] = None; sys.modules['sb3_twodrl'] = None; "
         f"import torch; p = torch.jit.load({str(tmp_path / 'p.pt')!r}); "
         "print(int(p(torch.zeros(1, 34))[0]))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() in {"0", "1", "2", "3"}
+
+
+def _observations(n_random: int) -> np.ndarray:
+    rng = np.random.default_rng(0)
+    real = gym.make("envs:NomadOfficeReal-v0")
+    obs = [real.reset(seed=2)[0]]
+    for _ in range(60):
+        o, _, term, trunc, _ = real.step(int(rng.integers(4)))
+        obs.append(real.reset()[0] if term or trunc else o)
+    return np.concatenate([np.stack(obs), rng.random((n_random, 34), dtype=np.float32)])
+
+
+@pytest.mark.parametrize("algo", [TwoDimA2C, A2C])
+def test_onnx_actions_equal_deterministic_predict(tmp_path, algo):
+    ort = pytest.importorskip("onnxruntime")
+    pytest.importorskip("onnx")
+    th.manual_seed(0)
+    model = algo("MlpPolicy", gym.make("envs:NomadOfficeMemorable-v0"), n_steps=8, gamma=0.9, seed=0, device="cpu")
+    model.learn(64)
+    path = export_onnx(model, tmp_path / "policy.onnx")
+    session = ort.InferenceSession(str(path))
+    assert json.loads(session.get_modelmeta().custom_metadata_map["meta.json"])["algorithm"] == algo.__name__
+    batch = _observations(300)
+    expected, _ = model.predict(batch, deterministic=True)
+    got = session.run(["action"], {"obs": batch})[0]
+    assert got.dtype == np.int64 and np.array_equal(got, expected)
+    # one reading at a time, as on the robot
+    stream = [int(session.run(["action"], {"obs": row[None]})[0][0]) for row in batch[:20]]
+    assert stream == [int(model.predict(row, deterministic=True)[0]) for row in batch[:20]]
+
+
+def test_onnx_cli_runs_without_torch_or_sb3(tmp_path):
+    pytest.importorskip("onnxruntime")
+    pytest.importorskip("onnx")
+    TwoDimA2C("MlpPolicy", gym.make("envs:NomadOfficeMemorable-v0"), seed=0, device="cpu").save(tmp_path / "m.zip")
+    main([str(tmp_path / "m.zip"), str(tmp_path / "p.onnx"), "--format", "onnx"])
+    code = (
+        "import sys; sys.modules['torch'] = None; sys.modules['stable_baselines3'] = None; "
+        "import numpy, onnxruntime; "
+        f"s = onnxruntime.InferenceSession({str(tmp_path / 'p.onnx')!r}); "
+        "print(int(s.run(['action'], {'obs': numpy.zeros((1, 34), numpy.float32)})[0][0]))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() in {"0", "1", "2", "3"}

@@ -20,9 +20,11 @@ from typing import Any
 
 import numpy as np
 
+from envs.memorable.recording import drive_and_record
 from envs.nomad import sensors
 from envs.nomad.geometry import ROBOT_RADIUS_CM, STEP_CM, OfficeMap, map_source
 from envs.nomad.office import OfficeCore, office_core
+from envs.nomad.realistic import RealisticModel
 from envs.nomad.sensors import HIGH_CM, LOW_CM
 
 SCHEMA_VERSION = 1
@@ -242,16 +244,39 @@ def record_database(
     noise: sensors.NoiseModel | None = None,
     seed: int = 0,
     progress: bool = False,
+    model: RealisticModel | None = None,
 ) -> SensorDatabase:
-    """Drive a virtual robot over every reachable cell, recording ``k`` readings per cell.
+    """Record ``k`` readings per reachable cell of a virtual robot.
 
-    ``noise=None`` records the ideal (exact) sensors, otherwise the realistic model of
-    ``NomadOfficeReal-v0`` (a :class:`~envs.nomad.sensors.NoiseModel`); readings are saturated
+    With ``model`` (a :class:`~envs.nomad.realistic.RealisticModel`, the stand-in robot of
+    ``NomadOfficeReal-v0``) the robot records as a real one would: it drives to each cell by dead
+    reckoning and files the reading taken at its drifted true pose under its odometry's cell
+    (:func:`envs.memorable.recording.drive_and_record`). Otherwise it is placed exactly on each
+    cell: ``noise=None`` records the ideal (exact) sensors, a
+    :class:`~envs.nomad.sensors.NoiseModel` adds per-reading noise to them. Readings are saturated
     to the sensors' ranges as a real robot reports them. Unreachable free cells get no readings.
     """
     if isinstance(k, bool) or not isinstance(k, int) or k < 1:
         raise ValueError(f"k must be a positive int, got {k!r}")
+    if model is not None and not isinstance(model, RealisticModel):
+        raise TypeError(f"model must be a RealisticModel or None, got {type(model).__name__}: {model!r}")
+    if model is not None and noise is not None:
+        raise ValueError("pass either model (the stand-in robot) or noise (noisy ideal sensors), not both")
     core = office_core(map)
+    if model is not None:
+        counts, per_cell, stats = drive_and_record(core, model, k, seed)
+        recording = {
+            "source": "simulated",
+            "sensor_model": "realistic (envs.nomad.realistic.RealisticModel, NomadOfficeReal-v0)",
+            "model": model.describe(),
+            "samples_per_cell": k,
+            "seed": seed,
+            "how": "stand-in robot driven from the start to every reachable cell by dead reckoning, once per tour; "
+            "each reading taken at the drifted true pose, filed under the odometry's cell",
+            **stats,
+        }
+        ranges = np.concatenate([r for r in per_cell if len(r)], axis=0)
+        return SensorDatabase(core.lattice.cells.copy(), counts, ranges, _metadata(core, recording))
     rng = np.random.default_rng(seed)
     cells = np.flatnonzero(core.lattice.reachable)
     counts = np.where(core.lattice.reachable, k, 0).astype(np.int64)
@@ -268,7 +293,7 @@ def record_database(
         rows.append(np.clip(exact, LOW_CM, HIGH_CM))
     recording = {
         "source": "simulated",
-        "sensor_model": "ideal" if noise is None else "realistic (NomadOfficeReal-v0 NoiseModel)",
+        "sensor_model": "ideal" if noise is None else "noisy ideal (envs.nomad.sensors.NoiseModel)",
         "noise_model": None if noise is None else asdict(noise),
         "samples_per_cell": k,
         "seed": seed,

@@ -66,6 +66,11 @@ def _normal_table() -> np.ndarray:
     return np.array([dist.inv_cdf((k + 0.5) / 65536) for k in range(65536)])
 
 
+def standard_normal(lanes: np.ndarray) -> np.ndarray:
+    """Standard-normal draws from 16-bit hash lanes (any shape), by the quantile table."""
+    return _normal_table()[lanes]
+
+
 _SENSOR_IDS = np.arange(1, N_SONAR + 1, dtype=np.uint64)
 
 

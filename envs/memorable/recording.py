@@ -1,0 +1,108 @@
+"""Recording a sensor database as a real robot would: driving by dead reckoning (issue 12).
+
+A real robot does not know where it is: it labels each recording with its odometry. The
+recorder below drives the stand-in robot of :mod:`envs.nomad.realistic` from the map's start to
+every reachable lattice cell along the shortest lattice path, commanding 10 cm moves; the robot's
+true pose drifts (slip, scale and misalignment errors), the reading is taken at the true pose and
+filed under the cell its odometry reports. Each of the ``k`` tours drives every cell once, with
+fresh episode keys, so a cell's ``k`` readings come from ``k`` independent drifts and pings.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from envs.nomad.geometry import ROBOT_RADIUS_CM, swept_clearance
+from envs.nomad.office import OfficeCore
+from envs.nomad.realistic import RealisticModel
+from envs.nomad.sensors import HIGH_CM, LOW_CM
+
+
+def shortest_paths(core: OfficeCore) -> list[list[int]]:
+    """Per lattice cell, the actions of a shortest collision-free lattice path from the start (empty if unreachable)."""
+    moves = core.lattice.moves
+    parent = np.full(len(moves), -1)
+    action = np.full(len(moves), -1)
+    seen = np.zeros(len(moves), dtype=bool)
+    seen[core.start_cell] = True
+    frontier = [core.start_cell]
+    while frontier:
+        nxt = []
+        for cell in frontier:
+            for a, target in enumerate(moves[cell]):
+                if target >= 0 and not seen[target]:
+                    seen[target], parent[target], action[target] = True, cell, a
+                    nxt.append(int(target))
+        frontier = nxt
+    paths: list[list[int]] = []
+    for cell in range(len(moves)):
+        path: list[int] = []
+        while parent[cell] >= 0:
+            path.append(int(action[cell]))
+            cell = int(parent[cell])
+        paths.append(path[::-1])
+    return paths
+
+
+def drive_and_record(
+    core: OfficeCore, model: RealisticModel, k: int, seed: int, max_tries: int = 20
+) -> tuple[np.ndarray, list[np.ndarray], dict[str, Any]]:
+    """``k`` tours over the reachable cells; returns ``(counts, readings per cell, statistics)``.
+
+    A run whose true pose bumps into a wall is driven again with fresh keys (the operator puts the
+    robot back at the start), up to ``max_tries`` times; a cell whose run never succeeds gets fewer
+    than ``k`` readings.
+    """
+    if isinstance(k, bool) or not isinstance(k, int) or k < 1:
+        raise ValueError(f"k must be a positive int, got {k!r}")
+    scene = model.scene(core.office)
+    walls = core.office.walls
+    cells = np.flatnonzero(core.lattice.reachable)
+    paths = shortest_paths(core)
+    length = np.array([len(paths[c]) for c in cells])
+    plan = np.full((len(cells), max(int(length.max()), 1)), -1)
+    for row, cell in enumerate(cells):
+        plan[row, : length[row]] = paths[cell]
+    start = np.array(core.office.start, dtype=np.float64)
+    rng = np.random.default_rng(seed)
+    per_cell: list[list[np.ndarray]] = [[] for _ in range(len(core.lattice.cells))]
+    bumps, errors = 0, []
+    for _ in range(k):
+        todo = np.arange(len(cells))
+        for _ in range(max_tries):
+            if len(todo) == 0:
+                break
+            keys = rng.integers(0, 2**63, len(todo), dtype=np.uint64)
+            pos = np.repeat(start[None], len(todo), axis=0)
+            ok = np.ones(len(todo), dtype=bool)
+            for step in range(plan.shape[1]):
+                moving = ok & (step < length[todo])
+                if not moving.any():
+                    break
+                rows = np.flatnonzero(moving)
+                actions = plan[todo[rows], step]
+                target = pos[rows] + model.displacement(actions, keys[rows], np.full(len(rows), step + 1))
+                clear = (swept_clearance(pos[rows], target, walls) > ROBOT_RADIUS_CM) & core.office.inside_bounds(
+                    target
+                )
+                pos[rows[clear]] = target[clear]
+                ok[rows[~clear]] = False
+            bumps += int((~ok).sum())
+            done = np.flatnonzero(ok)
+            readings = scene.ranges(pos[done], keys[done], length[todo[done]] + 1)
+            odometry = core.lattice.cells[cells[todo[done]]]
+            errors.extend(np.linalg.norm(pos[done] - odometry, axis=1).tolist())
+            for row, reading in zip(todo[done], readings, strict=True):
+                per_cell[cells[row]].append(np.clip(reading, LOW_CM, HIGH_CM))
+            todo = todo[~ok]
+    counts = np.array([len(r) for r in per_cell], dtype=np.int64)
+    stats = {
+        "tours": k,
+        "bumped_runs": bumps,
+        "cells_short_of_k": int(((counts < k) & core.lattice.reachable).sum()),
+        "median_odometry_error_cm": float(np.median(errors)),
+        "p95_odometry_error_cm": float(np.percentile(errors, 95)),
+    }
+    return counts, [np.array(r).reshape(-1, 32) for r in per_cell], stats
