@@ -6,6 +6,7 @@ import torch as th
 from gymnasium import spaces
 from stable_baselines3 import A2C
 from stable_baselines3.common.buffers import RolloutBuffer
+from stable_baselines3.common.distributions import Distribution
 from stable_baselines3.common.policies import BasePolicy
 from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedule
 from stable_baselines3.common.utils import explained_variance
@@ -129,6 +130,10 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
             device=device,
             _init_setup_model=_init_setup_model,
         )
+
+    def _rollout_log_probs(self, latent_pi: th.Tensor, distribution: Distribution, actions: th.Tensor) -> th.Tensor:
+        """A2C never reads ``old_log_prob``: the tempered distribution's, which costs no second distribution."""
+        return distribution.log_prob(actions)
 
     def train(self) -> None:
         """One gradient step: actor on the utility (eq. 1, 10), each critic on its own TD(lambda) target."""
