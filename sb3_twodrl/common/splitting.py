@@ -19,22 +19,25 @@ SPLIT_MODES = ("auto", "info", "cost", "sign")
 
 
 def _info_values(infos: Sequence[dict[str, Any]], key: str, mode: str) -> np.ndarray:
-    """``info[key]`` of every env as float64; ``ValueError`` naming the mode, the key and the env if one is
-    missing or not a real scalar."""
+    """``info[key]`` of every env as float64.
+
+    :raises ValueError: naming the mode, the key and the env if one is missing, or if a value is not
+        a real scalar (a string, even ``"0"``, None or a bool is an error, not a number)
+    """
     try:
-        values = np.array([info[key] for info in infos], dtype=np.float64)
+        values = np.array([info[key] for info in infos])
     except KeyError:
         idx = next(i for i, info in enumerate(infos) if key not in info)
         raise ValueError(
             f'reward_split="{mode}" needs info["{key}"] at every step, but env {idx}\'s info has only the keys '
             f'{sorted(infos[idx])} (use another reward_split, e.g. "sign" or a callable)'
         ) from None
-    except (TypeError, ValueError):
+    except ValueError:  # ragged sequences
         values = np.empty(0)
-    if values.shape != (len(infos),):
+    if values.dtype.kind not in "iuf" or values.shape != (len(infos),):
         bad = [info[key] for info in infos]
         raise ValueError(f'reward_split="{mode}": info["{key}"] must be a real number in every env, got {bad!r}')
-    return values
+    return values.astype(np.float64, copy=False)
 
 
 def split_info(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
