@@ -7,7 +7,7 @@ from gymnasium import spaces
 from stable_baselines3 import A2C
 from stable_baselines3.common.buffers import RolloutBuffer
 from stable_baselines3.common.distributions import Distribution
-from stable_baselines3.common.policies import BasePolicy
+from stable_baselines3.common.policies import ActorCriticPolicy, BasePolicy
 from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedule
 from stable_baselines3.common.utils import explained_variance
 from torch.nn import functional as F
@@ -40,7 +40,7 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
     :param punishment_vf_coef: loss weight of the punishment critic; None: ``vf_coef``
     :param punishment_weight: ``w`` in the utility ``A_R - w * A_P`` (eq. 1 is ``w = 1``)
     :param reward_split: how ``(reward, info)`` becomes ``(r_R, r_P)``: ``"auto"``, ``"info"``,
-        ``"cost"``, ``"sign"`` or a callable (see ``sb3_twodrl.splitting``)
+        ``"cost"``, ``"sign"`` or a callable (see ``sb3_twodrl.common.splitting``)
     :param temperature: ``"interest"`` (eq. 9 with ``T = delta+``) or a fixed positive temperature
     :param min_temperature: floor of the interest temperature; keeps the policy from freezing
         into argmax once the critics settle and the interest collapses toward 0
@@ -57,7 +57,7 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
 
     def __init__(
         self,
-        policy: str | type[TwoDimActorCriticPolicy],
+        policy: str | type[ActorCriticPolicy],
         env: GymEnv | str,
         learning_rate: float | Schedule = 7e-4,
         n_steps: int = 5,
