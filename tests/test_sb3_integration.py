@@ -6,6 +6,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch as th
+from stable_baselines3 import A2C
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.evaluation import evaluate_policy
@@ -141,3 +142,28 @@ def test_image_observations_and_multibinary_actions() -> None:
 def test_cuda_device() -> None:
     model = TwoDimA2C("MlpPolicy", "CartPole-v1", device="cuda", seed=0).learn(50)
     assert model.policy.running_interest.device.type == "cuda"
+
+
+def test_temperature_settings_are_algorithm_arguments(tmp_path: Path) -> None:
+    """Not policy kwargs: ``load(..., policy_kwargs=...)`` with the kwargs trained with works, as in SB3."""
+    policy_kwargs = dict(net_arch=[32])
+    model = TwoDimA2C(
+        "MlpPolicy", "CartPole-v1", use_rms_prop=False, policy_kwargs=policy_kwargs, max_temperature=3.0, seed=0
+    )
+    assert model.policy_kwargs == policy_kwargs
+    model.save(tmp_path / "model.zip")
+    loaded = TwoDimA2C.load(tmp_path / "model.zip", policy_kwargs=dict(net_arch=[32]))
+    assert loaded.max_temperature == loaded.policy.max_temperature == 3.0
+
+
+def test_load_with_custom_objects(tmp_path: Path) -> None:
+    TwoDimA2C("MlpPolicy", "CartPole-v1", seed=0).save(tmp_path / "model.zip")
+    loaded = TwoDimA2C.load(tmp_path / "model.zip", custom_objects=dict(punishment_gamma=0.4, learning_rate=1e-3))
+    assert loaded.punishment_gamma == loaded.rollout_buffer.punishment_gamma == 0.4
+    assert loaded.learning_rate == 1e-3
+
+
+def test_loading_a_stock_a2c_file_says_so(tmp_path: Path) -> None:
+    A2C("MlpPolicy", "CartPole-v1", seed=0).save(tmp_path / "a2c.zip")
+    with pytest.raises(ValueError, match="saved by another algorithm"):
+        TwoDimA2C.load(tmp_path / "a2c.zip")

@@ -1,24 +1,39 @@
-"""Actor-critic policy with a reward critic, a punishment critic and a tempered action distribution.
+"""Actor-critic policies with a reward critic, a punishment critic and a tempered action distribution.
 
 The actor keeps SB3's action network: its outputs are the preferences ``p(s, a)`` of eq. 9-10.
 Actions are drawn from the softmax of ``p / T`` (eq. 9), ``T`` being the interest ``delta+``
-(eq. 2) clamped to ``[min_temperature, max_temperature]``.
+(eq. 2) clamped to ``[min_temperature, max_temperature]``. :class:`TwoDimPolicyMixin` adds the
+punishment head and the tempered distribution to any SB3 ``ActorCriticPolicy`` subclass
+(:func:`two_dim_policy_class`); the temperature settings are the algorithm's arguments, handed
+to the policy by :meth:`TwoDimPolicyMixin.set_temperature`.
 """
 
+import functools
 import math
 from functools import partial
 from typing import Any
 
 import numpy as np
 import torch as th
-from stable_baselines3.common.distributions import DiagGaussianDistribution, Distribution
+from stable_baselines3.common.distributions import (
+    DiagGaussianDistribution,
+    Distribution,
+    StateDependentNoiseDistribution,
+)
 from stable_baselines3.common.policies import ActorCriticPolicy, BaseModel
 from stable_baselines3.common.torch_layers import CombinedExtractor, NatureCNN
 from stable_baselines3.common.type_aliases import PyTorchObs
 from torch import nn
 
+from sb3_twodrl.common.validation import is_real
+
 INTEREST_EMA_RATE = 0.1
 """Weight of the newest rollout's mean interest in the running estimate used by ``predict``."""
+
+DEFAULT_TEMPERATURE: dict[str, Any] = dict(temperature="interest", min_temperature=0.5, max_temperature=10.0)
+"""The algorithms' default temperature settings, which a policy has until the algorithm sets its own."""
+
+_GAUSSIANS = (DiagGaussianDistribution, StateDependentNoiseDistribution)
 
 
 def check_temperature(temperature: str | float, min_temperature: float, max_temperature: float) -> None:
@@ -26,72 +41,73 @@ def check_temperature(temperature: str | float, min_temperature: float, max_temp
     if isinstance(temperature, str):
         if temperature != "interest":
             raise ValueError(f'temperature must be "interest" or a positive float, got {temperature!r}')
-    elif not (isinstance(temperature, (int, float)) and math.isfinite(temperature) and temperature > 0):
+    elif not (is_real(temperature) and math.isfinite(temperature) and temperature > 0):
         raise ValueError(f'temperature must be "interest" or a positive finite float, got {temperature!r}')
-    if not (isinstance(min_temperature, (int, float)) and math.isfinite(min_temperature) and min_temperature > 0):
+    if not (is_real(min_temperature) and math.isfinite(min_temperature) and min_temperature > 0):
         raise ValueError(f"min_temperature must be a positive finite float, got {min_temperature!r}")
-    if not (isinstance(max_temperature, (int, float)) and math.isfinite(max_temperature)):
+    if not (is_real(max_temperature) and math.isfinite(max_temperature)):
         raise ValueError(f"max_temperature must be a finite float, got {max_temperature!r}")
     if min_temperature > max_temperature:
         raise ValueError(f"min_temperature ({min_temperature}) must not exceed max_temperature ({max_temperature})")
 
 
-class TwoDimActorCriticPolicy(ActorCriticPolicy):
+class TwoDimPolicyMixin:
     """
-    Actor, reward critic ``V_R`` (SB3's value head) and punishment critic ``V_P`` (eq. 3-8).
+    Reward critic ``V_R`` (SB3's value head), punishment critic ``V_P`` (eq. 3-8) and the tempered
+    distribution of eq. 9, on top of an SB3 ``ActorCriticPolicy``.
 
     ``V_P`` is a second linear head on SB3's critic network, beside ``V_R``'s: the two critics
     share the critic's hidden layers (not the actor's) and have their own loss weights (a
     separate network would cost a whole MLP pass per step; README, "Design notes"). The head is
     initialised without touching the global RNG, so that a seeded run draws the same random
-    numbers as stock A2C.
+    numbers as stock SB3.
 
     ``predict_values`` keeps SB3's meaning (``V_R``). ``evaluate_actions`` and ``forward`` use the
     raw preferences (``T = 1``); rollout collection and ``predict`` sample from the tempered
     distribution (eq. 9), ``predict`` with the running interest estimate saved with the policy.
-
-    :param temperature: ``"interest"`` (eq. 9 with ``T = delta+``) or a fixed positive temperature
-    :param min_temperature: floor of the interest temperature
-    :param max_temperature: ceiling of the interest temperature
-    :param args: positional arguments of ``ActorCriticPolicy``
-    :param kwargs: keyword arguments of ``ActorCriticPolicy``
+    It relies only on what every ``ActorCriticPolicy`` has: ``mlp_extractor`` (``forward_actor``,
+    ``forward_critic``, ``latent_dim_vf``), ``action_net``, ``value_net`` and ``action_dist``.
     """
 
-    def __init__(
-        self,
-        *args: Any,
-        temperature: str | float = "interest",
-        min_temperature: float = 0.5,
-        max_temperature: float = 10.0,
-        **kwargs: Any,
-    ):
+    # ActorCriticPolicy's attributes that the mixin uses
+    action_dist: Distribution
+    action_net: nn.Module
+    value_net: nn.Module
+    mlp_extractor: Any
+    log_std: th.Tensor
+    ortho_init: bool
+    share_features_extractor: bool
+    pi_features_extractor: nn.Module
+    vf_features_extractor: nn.Module
+    running_interest: th.Tensor
+
+    def __init__(self, *args: Any, **kwargs: Any):
+        self.set_temperature(**DEFAULT_TEMPERATURE)
+        super().__init__(*args, **kwargs)
+
+    def set_temperature(self, temperature: str | float, min_temperature: float, max_temperature: float) -> None:
+        """Set how the interest becomes the temperature of eq. 9 (the algorithm's arguments)."""
         check_temperature(temperature, min_temperature, max_temperature)
         self.temperature = temperature
         self.min_temperature = min_temperature
         self.max_temperature = max_temperature
-        super().__init__(*args, **kwargs)
-        if self.use_sde:
-            raise ValueError("use_sde=True is not supported: the temperature scales the Gaussian's own std")
 
     def _build(self, lr_schedule: Any) -> None:
-        super()._build(lr_schedule)
+        super()._build(lr_schedule)  # type: ignore[misc]
         with th.random.fork_rng(devices=[]):
             self.punishment_value_net = nn.Linear(self.mlp_extractor.latent_dim_vf, 1)
             if self.ortho_init:
-                self.punishment_value_net.apply(partial(self.init_weights, gain=1))
-        self.register_buffer("running_interest", th.zeros(()))
-        self.optimizer = self.optimizer_class(self.parameters(), lr=lr_schedule(1), **self.optimizer_kwargs)
-
-    def _get_constructor_parameters(self) -> dict[str, Any]:
-        data = super()._get_constructor_parameters()
-        data.update(
-            temperature=self.temperature, min_temperature=self.min_temperature, max_temperature=self.max_temperature
+                self.punishment_value_net.apply(partial(self.init_weights, gain=1))  # type: ignore[attr-defined]
+        self.register_buffer("running_interest", th.zeros(()))  # type: ignore[attr-defined]
+        self.optimizer = self.optimizer_class(  # type: ignore[attr-defined]
+            self.parameters(),  # type: ignore[attr-defined]
+            lr=lr_schedule(1),
+            **self.optimizer_kwargs,  # type: ignore[attr-defined]
         )
-        return data
 
     def evaluate_state(self, obs: PyTorchObs) -> tuple[th.Tensor, th.Tensor, th.Tensor]:
         """Actor latent, ``V_R(s)`` and ``V_P(s)`` in one pass."""
-        features = self.extract_features(obs)
+        features = self.extract_features(obs)  # type: ignore[attr-defined]
         if self.share_features_extractor:
             latent_pi, latent_vf = self.mlp_extractor(features)
         else:
@@ -105,12 +121,12 @@ class TwoDimActorCriticPolicy(ActorCriticPolicy):
     ) -> tuple[th.Tensor, th.Tensor, th.Tensor, th.Tensor | None]:
         """``V_R``, ``V_P``, log-probability and entropy of ``actions`` under the raw preferences (eq. 10)."""
         latent_pi, values, punishment_values = self.evaluate_state(obs)
-        distribution = self._get_action_dist_from_latent(latent_pi)
+        distribution = self._get_action_dist_from_latent(latent_pi)  # type: ignore[attr-defined]
         return values, punishment_values, distribution.log_prob(actions), distribution.entropy()
 
     def predict_critics(self, obs: PyTorchObs) -> tuple[th.Tensor, th.Tensor]:
         """Reward critic ``V_R(s)`` and punishment critic ``V_P(s)`` (eq. 3, 4)."""
-        features = BaseModel.extract_features(self, obs, self.vf_features_extractor)
+        features = BaseModel.extract_features(self, obs, self.vf_features_extractor)  # type: ignore[arg-type]
         latent_vf = self.mlp_extractor.forward_critic(features)
         return self.value_net(latent_vf), self.punishment_value_net(latent_vf)
 
@@ -122,23 +138,29 @@ class TwoDimActorCriticPolicy(ActorCriticPolicy):
         """``1 / T`` of eq. 9 for each interest value (float32).
 
         An interest of exactly 0 gives uniform random actions (``1/T = 0``), as the paper states;
-        a Gaussian has no uniform limit and takes ``max_temperature`` instead.
+        a Gaussian (gSDE's included) has no uniform limit and takes ``max_temperature`` instead.
         """
         if self.temperature != "interest":
             return np.full(np.shape(interest), 1.0 / self.temperature, dtype=np.float32)
         interest = np.asarray(interest, dtype=np.float32)
         inverse = np.reciprocal(np.minimum(np.maximum(interest, self.min_temperature), self.max_temperature))
-        if not isinstance(self.action_dist, DiagGaussianDistribution):
+        if not isinstance(self.action_dist, _GAUSSIANS):
             inverse *= interest > 0
         return inverse
 
     def tempered_distribution(self, latent_pi: th.Tensor, inverse_temperature: np.ndarray) -> Distribution:
-        """Action distribution of eq. 9: preferences times ``1 / T`` (a Gaussian's std times ``T``)."""
+        """Action distribution of eq. 9: preferences times ``1 / T``; a Gaussian's std (gSDE: its noise) times ``T``.
+
+        gSDE's noise and std are linear in its latent features, so scaling the features by ``T``
+        scales both (the exploration matrix is left as sampled).
+        """
         inverse = th.from_numpy(inverse_temperature[:, None]).to(latent_pi.device)
         mean_actions = self.action_net(latent_pi)
+        if isinstance(self.action_dist, StateDependentNoiseDistribution):
+            return self.action_dist.proba_distribution(mean_actions, self.log_std, latent_pi / inverse)
         if isinstance(self.action_dist, DiagGaussianDistribution):
             return self.action_dist.proba_distribution(mean_actions, self.log_std - th.log(inverse))
-        return self.action_dist.proba_distribution(action_logits=mean_actions * inverse)
+        return self.action_dist.proba_distribution(action_logits=mean_actions * inverse)  # type: ignore[call-arg]
 
     def update_running_interest(self, mean_interest: float) -> None:
         """Fold one rollout's mean interest into the estimate that ``predict`` uses."""
@@ -148,7 +170,8 @@ class TwoDimActorCriticPolicy(ActorCriticPolicy):
         )
 
     def _actor_latent(self, obs: PyTorchObs) -> th.Tensor:
-        return self.mlp_extractor.forward_actor(BaseModel.extract_features(self, obs, self.pi_features_extractor))
+        features = BaseModel.extract_features(self, obs, self.pi_features_extractor)  # type: ignore[arg-type]
+        return self.mlp_extractor.forward_actor(features)
 
     def _running_distribution(self, latent_pi: th.Tensor) -> Distribution:
         interest = np.full(len(latent_pi), self.running_interest.item(), dtype=np.float32)
@@ -162,8 +185,12 @@ class TwoDimActorCriticPolicy(ActorCriticPolicy):
         """Sample at the running interest, or take the argmax of the raw preferences if ``deterministic``."""
         latent_pi = self._actor_latent(observation)
         if deterministic:
-            return self._get_action_dist_from_latent(latent_pi).get_actions(deterministic=True)
+            return self._get_action_dist_from_latent(latent_pi).get_actions(deterministic=True)  # type: ignore[attr-defined]
         return self._running_distribution(latent_pi).get_actions()
+
+
+class TwoDimActorCriticPolicy(TwoDimPolicyMixin, ActorCriticPolicy):
+    """SB3's ``ActorCriticPolicy`` with the punishment critic and the tempered distribution (eq. 3-9)."""
 
 
 class TwoDimActorCriticCnnPolicy(TwoDimActorCriticPolicy):
@@ -178,3 +205,23 @@ class TwoDimMultiInputPolicy(TwoDimActorCriticPolicy):
 
     def __init__(self, *args: Any, features_extractor_class: type = CombinedExtractor, **kwargs: Any):
         super().__init__(*args, features_extractor_class=features_extractor_class, **kwargs)
+
+
+@functools.cache
+def two_dim_policy_class(policy_class: type) -> type[TwoDimPolicyMixin]:
+    """The 2D-RL version of an SB3 ``ActorCriticPolicy`` subclass (the class itself if it is one already).
+
+    A user's subclass (custom ``mlp_extractor``, features extractor, ...) gets the punishment head
+    and the tempered distribution by :class:`TwoDimPolicyMixin`; one class per ``policy_class``.
+
+    :raises ValueError: if ``policy_class`` is not an ``ActorCriticPolicy`` subclass
+    """
+    if isinstance(policy_class, type) and issubclass(policy_class, TwoDimPolicyMixin):
+        return policy_class
+    if not (isinstance(policy_class, type) and issubclass(policy_class, ActorCriticPolicy)):
+        raise ValueError(
+            f"policy must be a subclass of stable_baselines3's ActorCriticPolicy, got {policy_class!r}: "
+            "2D-RL adds its punishment critic head beside the ActorCriticPolicy's value head and tempers "
+            "its action distribution (subclass ActorCriticPolicy or sb3_twodrl.TwoDimActorCriticPolicy)"
+        )
+    return type(f"TwoDim{policy_class.__name__}", (TwoDimPolicyMixin, policy_class), {"__module__": __name__})

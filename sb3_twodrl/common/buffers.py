@@ -11,7 +11,7 @@ from stable_baselines3.common.vec_env import VecNormalize
 
 
 class TwoDimRolloutBufferSamples(NamedTuple):
-    """SB3's rollout samples (``advantages`` being the utility) plus the punishment critic's target."""
+    """SB3's rollout samples (``advantages`` being the utility) plus the punishment critic's old values and target."""
 
     observations: PyTorchObs
     actions: th.Tensor
@@ -19,6 +19,7 @@ class TwoDimRolloutBufferSamples(NamedTuple):
     old_log_prob: th.Tensor
     advantages: th.Tensor
     returns: th.Tensor
+    old_punishment_values: th.Tensor
     punishment_returns: th.Tensor
 
 
@@ -147,8 +148,12 @@ class TwoDimBufferMixin:
 
     def _get_samples(self, batch_inds: np.ndarray, env: VecNormalize | None = None) -> TwoDimRolloutBufferSamples:
         samples = super()._get_samples(batch_inds, env)  # type: ignore[misc]
-        punishment_returns = self.to_torch(self.punishment_returns[batch_inds].flatten())  # type: ignore[attr-defined]
-        return TwoDimRolloutBufferSamples(*samples, punishment_returns=punishment_returns)
+        to_torch = self.to_torch  # type: ignore[attr-defined]
+        return TwoDimRolloutBufferSamples(
+            *samples,
+            old_punishment_values=to_torch(self.punishment_values[batch_inds].flatten()),
+            punishment_returns=to_torch(self.punishment_returns[batch_inds].flatten()),
+        )
 
 
 class TwoDimRolloutBuffer(TwoDimBufferMixin, RolloutBuffer):
