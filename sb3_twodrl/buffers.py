@@ -11,7 +11,8 @@ from stable_baselines3.common.vec_env import VecNormalize
 
 
 class TwoDimRolloutBufferSamples(NamedTuple):
-    """SB3's rollout samples (``advantages`` being the utility) plus the punishment critic's target."""
+    """SB3's rollout samples (``advantages`` being the utility), the punishment critic's target and
+    the interest ``delta+`` of each sample's transition (the target of the ``"learned"`` interest head)."""
 
     observations: PyTorchObs
     actions: th.Tensor
@@ -20,6 +21,7 @@ class TwoDimRolloutBufferSamples(NamedTuple):
     advantages: th.Tensor
     returns: th.Tensor
     punishment_returns: th.Tensor
+    interests: th.Tensor
 
 
 def td_errors_and_gae(
@@ -141,14 +143,15 @@ class TwoDimBufferMixin:
 
     def get(self, batch_size: int | None = None) -> Generator[TwoDimRolloutBufferSamples, None, None]:
         if not self.generator_ready:  # flattened like SB3's arrays, so that they stay aligned with them
-            for name in ("punishment_values", "punishment_returns"):
+            for name in ("punishment_values", "punishment_returns", "interests"):
                 setattr(self, name, self.swap_and_flatten(getattr(self, name)))  # type: ignore[attr-defined]
         yield from super().get(batch_size)  # type: ignore[misc]
 
     def _get_samples(self, batch_inds: np.ndarray, env: VecNormalize | None = None) -> TwoDimRolloutBufferSamples:
         samples = super()._get_samples(batch_inds, env)  # type: ignore[misc]
         punishment_returns = self.to_torch(self.punishment_returns[batch_inds].flatten())  # type: ignore[attr-defined]
-        return TwoDimRolloutBufferSamples(*samples, punishment_returns=punishment_returns)
+        interests = self.to_torch(self.interests[batch_inds].flatten())  # type: ignore[attr-defined]
+        return TwoDimRolloutBufferSamples(*samples, punishment_returns=punishment_returns, interests=interests)
 
 
 class TwoDimRolloutBuffer(TwoDimBufferMixin, RolloutBuffer):

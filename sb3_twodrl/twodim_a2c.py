@@ -62,10 +62,10 @@ class TwoDimA2C(A2C):
 
     A reward critic ``V_R`` (discount ``gamma``) and a punishment critic ``V_P`` (discount
     ``punishment_gamma``) learn the two evaluations (eq. 3-8). The actor follows the utility
-    ``A_R - punishment_weight * A_P`` (eq. 1, 10, with GAE per stream) and, in ``"interest"`` mode,
-    acts with the softmax temperature ``T = |delta_R| + |delta_P|`` of the transition that led each
-    env into its current state (eq. 2, 9), clamped to ``[min_temperature, max_temperature]``; an
-    interest of exactly 0 (an episode's first step) means uniform random actions.
+    ``A_R - punishment_weight * A_P`` (eq. 1, 10, with GAE per stream) and, with
+    ``temperature="interest"``, acts with a softmax temperature set by the interest
+    ``delta+ = |delta_R| + |delta_P|`` (eq. 2, 9) as the ``interest`` and ``preferences`` modes say
+    (:mod:`sb3_twodrl.interest`), clamped to ``[min_temperature, max_temperature]``.
 
     Every argument of SB3's ``A2C`` keeps its meaning and default (``gamma`` discounts the reward
     stream); see ``A2C`` for them.
@@ -76,7 +76,13 @@ class TwoDimA2C(A2C):
     :param punishment_weight: ``w`` in the utility ``A_R - w * A_P`` (eq. 1 is ``w = 1``)
     :param reward_split: how ``(reward, info)`` becomes ``(r_R, r_P)``: ``"auto"``, ``"info"``,
         ``"cost"``, ``"sign"`` or a callable (see ``sb3_twodrl.splitting``)
-    :param temperature: ``"interest"`` (eq. 9 with ``T = delta+``) or a fixed positive temperature
+    :param temperature: ``"interest"`` (eq. 9, ``T`` set by the interest) or a fixed positive temperature
+    :param interest: how the interest sets ``T``: ``"paper"`` (eq. 9 literally: ``T = delta+`` of the
+        transition into the state), ``"relative"`` (``delta+`` over its running mean) or ``"learned"``
+        (a head's ``E[delta+ | s]`` over the running mean of ``delta+``)
+    :param preferences: ``"raw"`` (eq. 9 literally) or ``"bounded"`` (preferences divided by
+        ``max(1, their sd over the actions)``, so that ``min_temperature`` bounds how greedy actions get)
+    :param interest_coef: loss weight of the ``"learned"`` mode's interest head (its target is ``delta+``)
     :param min_temperature: floor of the interest temperature; keeps the policy from freezing
         into argmax once the critics settle and the interest collapses toward 0
     :param max_temperature: ceiling of the interest temperature
@@ -120,6 +126,9 @@ class TwoDimA2C(A2C):
         punishment_weight: float = 1.0,
         reward_split: str | RewardSplit = "auto",
         temperature: str | float = "interest",
+        interest: str = "paper",
+        preferences: str = "raw",
+        interest_coef: float = 0.5,
         min_temperature: float = 0.5,
         max_temperature: float = 10.0,
         _init_setup_model: bool = True,
@@ -138,8 +147,16 @@ class TwoDimA2C(A2C):
             _check_non_negative(name, locals()[name])
         for name in ("punishment_vf_coef", "punishment_weight"):
             _check_non_negative(name, getattr(self, name))
+        _check_non_negative("interest_coef", interest_coef)
+        self.interest_coef = interest_coef
         policy_kwargs = dict(policy_kwargs or {})
-        policy_kwargs.update(temperature=temperature, min_temperature=min_temperature, max_temperature=max_temperature)
+        policy_kwargs.update(
+            temperature=temperature,
+            interest=interest,
+            preferences=preferences,
+            min_temperature=min_temperature,
+            max_temperature=max_temperature,
+        )
         self._carried_interest: tuple[Any, np.ndarray] | None = None
         super().__init__(
             policy,
@@ -233,9 +250,12 @@ class TwoDimA2C(A2C):
         reward_split = make_reward_split(self.reward_split)
         with th.no_grad():
             obs_tensor = obs_as_tensor(self._last_obs, self.device)  # type: ignore[arg-type]
-            latent_pi, values, punishment_values = self.policy.evaluate_state(obs_tensor)
+            latent_pi, values, punishment_values, predicted = self.policy.evaluate_state(obs_tensor)
         critics = _flat(values), _flat(punishment_values)
-        inverse_temperature = self.policy.inverse_temperature(self._interest_at_rollout_start())
+        learned = predicted is not None
+        inverse_temperature = self.policy.inverse_temperature(
+            _flat(predicted) if learned else self._interest_at_rollout_start()
+        )
 
         while n_steps < n_rollout_steps:
             with th.no_grad():
@@ -267,12 +287,13 @@ class TwoDimA2C(A2C):
             with th.no_grad():
                 obs_tensor = obs_as_tensor(new_obs, self.device)  # type: ignore[arg-type]
                 if n_steps < n_rollout_steps:
-                    latent_pi, *next_values = self.policy.evaluate_state(obs_tensor)
+                    latent_pi, *next_values, predicted = self.policy.evaluate_state(obs_tensor)
                 else:  # only the critics are needed after the last step, to bootstrap the returns
                     next_values = self.policy.predict_critics(obs_tensor)
             next_critics = _flat(next_values[0]), _flat(next_values[1])
             rewards, punishments = split_rewards(reward_split, rewards, infos, self.num_timesteps)
             interest = self._interest(rewards, punishments, critics, next_critics, dones)
+            self.policy.update_interest_scale(interest, dones)
             # Bootstrap both critics on time-limit truncation, as SB3 does (GitHub issue #633)
             for idx, done in enumerate(dones):
                 if (
@@ -300,7 +321,8 @@ class TwoDimA2C(A2C):
             self._last_obs = new_obs  # type: ignore[assignment]
             self._last_episode_starts = dones
             (values, punishment_values), critics = next_values, next_critics
-            inverse_temperature = self.policy.inverse_temperature(interest)
+            if n_steps < n_rollout_steps:
+                inverse_temperature = self.policy.inverse_temperature(_flat(predicted) if learned else interest)
 
         rollout_buffer.compute_returns_and_advantage(
             last_values=values, dones=dones, last_punishment_values=punishment_values
@@ -312,6 +334,17 @@ class TwoDimA2C(A2C):
         callback.on_rollout_end()
         return True
 
+    def interest_share(self, inverse_temperatures: np.ndarray) -> float:
+        """Share of actions whose temperature the interest set: strictly between the clamps, not uniform.
+
+        0 at a fixed ``temperature``.
+        """
+        if self.policy.temperature != "interest":
+            return 0.0
+        low, high = np.float32(1.0 / self.policy.max_temperature), np.float32(1.0 / self.policy.min_temperature)
+        inside = (inverse_temperatures > low) & (inverse_temperatures < high)
+        return int(np.count_nonzero(inside)) / inverse_temperatures.size
+
     def train(self) -> None:
         """One gradient step: actor on the utility (eq. 1, 10), each critic on its own TD(lambda) target."""
         self.policy.set_training_mode(True)
@@ -322,7 +355,7 @@ class TwoDimA2C(A2C):
             if isinstance(self.action_space, spaces.Discrete):
                 actions = actions.long().flatten()
 
-            values, punishment_values, log_prob, entropy = self.policy.evaluate_actions_two_dim(
+            values, punishment_values, predicted, log_prob, entropy = self.policy.evaluate_actions_two_dim(
                 rollout_data.observations, actions
             )
             advantages = rollout_data.advantages
@@ -340,16 +373,25 @@ class TwoDimA2C(A2C):
                 + self.vf_coef * value_loss
                 + self.punishment_vf_coef * punishment_value_loss
             )
+            interest_loss = None
+            if predicted is not None:  # the head learns E[delta+ | s] (sb3_twodrl.interest, "learned")
+                interest_loss = F.mse_loss(rollout_data.interests, predicted.flatten())
+                loss = loss + self.interest_coef * interest_loss
             self.policy.optimizer.zero_grad()
             loss.backward()
             th.nn.utils.clip_grad_norm_(self.policy.parameters(), self.max_grad_norm)
             self.policy.optimizer.step()
 
         self._n_updates += 1
-        self._log_train(policy_loss, value_loss, punishment_value_loss, entropy_loss)
+        self._log_train(policy_loss, value_loss, punishment_value_loss, entropy_loss, interest_loss)
 
     def _log_train(
-        self, policy_loss: th.Tensor, value_loss: th.Tensor, punishment_value_loss: th.Tensor, entropy_loss: th.Tensor
+        self,
+        policy_loss: th.Tensor,
+        value_loss: th.Tensor,
+        punishment_value_loss: th.Tensor,
+        entropy_loss: th.Tensor,
+        interest_loss: th.Tensor | None,
     ) -> None:
         buffer = self.rollout_buffer
         self.logger.record("train/n_updates", self._n_updates, exclude="tensorboard")
@@ -367,9 +409,12 @@ class TwoDimA2C(A2C):
         self.logger.record("train/punishment_value_loss", punishment_value_loss.item())
         self.logger.record("train/interest", _mean(buffer.interests))
         self.logger.record("train/utility", _mean(buffer.utilities))
+        if interest_loss is not None:
+            self.logger.record("train/interest_loss", interest_loss.item())
         tempered = buffer.inverse_temperatures[buffer.inverse_temperatures > 0]
         if tempered.size:
             self.logger.record("train/temperature", _mean(1.0 / tempered))
+        self.logger.record("train/interest_share", self.interest_share(buffer.inverse_temperatures))
         self.logger.record("rollout/punishment_mean", _mean(buffer.punishments))
         if hasattr(self.policy, "log_std"):
             self.logger.record("train/std", th.exp(self.policy.log_std).mean().item())
