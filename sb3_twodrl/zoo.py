@@ -21,7 +21,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from sb3_twodrl.twodim_a2c import TwoDimA2C
+from sb3_twodrl.a2c import TwoDimA2C
 
 ALGO_KEY = "twoda2c"
 

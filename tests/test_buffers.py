@@ -5,7 +5,7 @@ import torch as th
 from gymnasium import spaces
 from stable_baselines3.common.buffers import RolloutBuffer
 
-from sb3_twodrl.buffers import TwoDimRolloutBuffer
+from sb3_twodrl.common.buffers import TwoDimRolloutBuffer
 
 N_STEPS, N_ENVS = 5, 3
 OBS_SPACE, ACTION_SPACE = spaces.Box(-1, 1, (2,)), spaces.Discrete(2)

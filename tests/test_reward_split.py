@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from sb3_twodrl import TwoDimA2C
-from sb3_twodrl.splitting import PYTHON_CHECK_MAX_ENVS, make_reward_split, split_rewards
+from sb3_twodrl.common.splitting import PYTHON_CHECK_MAX_ENVS, make_reward_split, split_rewards
 from tests.toy_envs import ScriptedFeedbackEnv
 
 FEEDBACK: dict[str, list[tuple[float, dict[str, Any]]]] = {

@@ -141,3 +141,15 @@ def test_image_observations_and_multibinary_actions() -> None:
 def test_cuda_device() -> None:
     model = TwoDimA2C("MlpPolicy", "CartPole-v1", device="cuda", seed=0).learn(50)
     assert model.policy.running_interest.device.type == "cuda"
+
+
+def test_temperature_settings_are_algorithm_arguments(tmp_path: Path) -> None:
+    """Not policy kwargs: ``load(..., policy_kwargs=...)`` with the kwargs trained with works, as in SB3."""
+    policy_kwargs = dict(net_arch=[32])
+    model = TwoDimA2C(
+        "MlpPolicy", "CartPole-v1", use_rms_prop=False, policy_kwargs=policy_kwargs, max_temperature=3.0, seed=0
+    )
+    assert model.policy_kwargs == policy_kwargs
+    model.save(tmp_path / "model.zip")
+    loaded = TwoDimA2C.load(tmp_path / "model.zip", policy_kwargs=dict(net_arch=[32]))
+    assert loaded.max_temperature == loaded.policy.max_temperature == 3.0

@@ -100,3 +100,23 @@ def test_stochastic_predict_uses_the_running_interest(biased_model: TwoDimA2C) -
     np.testing.assert_allclose(calm_start, 0.25, atol=0.04)
     assert settled.argmax() == 2 and settled[2] > 0.5
     assert (biased_model.predict(obs, deterministic=True)[0] == 2).all()
+
+
+@pytest.mark.parametrize("squash_output", [False, True])
+def test_temperature_scales_the_gsde_noise(squash_output: bool) -> None:
+    """gSDE: with the same exploration matrix, the action's deviation from the mean and the std grow by ``T``."""
+    model = TwoDimA2C("MlpPolicy", "Pendulum-v1", use_sde=True, policy_kwargs=dict(squash_output=squash_output), seed=0)
+    policy = model.policy
+    policy.reset_noise(1)
+    deviations, stds = [], []
+    with th.no_grad():
+        latent_pi = policy._actor_latent(th.ones((1, 3)))
+        mean = policy.action_net(latent_pi)
+        for temperature in (1.0, 3.0):
+            distribution = policy.tempered_distribution(latent_pi, np.array([1 / temperature], dtype=np.float32))
+            actions = distribution.get_actions()
+            deviations.append((th.atanh(actions) if squash_output else actions) - mean)
+            stds.append(distribution.distribution.stddev)
+    assert deviations[0].abs().min() > 0
+    assert th.allclose(deviations[1], 3.0 * deviations[0], rtol=1e-3)
+    assert th.allclose(stds[1], 3.0 * stds[0], rtol=1e-5)

@@ -30,8 +30,6 @@ how eq. 9 keeps its meaning (README, "Design notes"):
   preference; its std is multiplied by ``T`` in every mode.
 """
 
-import math
-
 import numpy as np
 import torch as th
 
@@ -45,25 +43,12 @@ PREFERENCE_BOUND = 1.0
 """Largest standard deviation over the actions of the ``"bounded"`` preferences."""
 
 
-def check_interest_settings(
-    temperature: str | float, interest: str, preferences: str, min_temperature: float, max_temperature: float
-) -> None:
-    """Raise ``ValueError`` unless the settings name a mode and keep eq. 9 finite."""
-    if isinstance(temperature, str):
-        if temperature != "interest":
-            raise ValueError(f'temperature must be "interest" or a positive float, got {temperature!r}')
-    elif not (isinstance(temperature, (int, float)) and math.isfinite(temperature) and temperature > 0):
-        raise ValueError(f'temperature must be "interest" or a positive finite float, got {temperature!r}')
+def check_interest_modes(interest: str, preferences: str) -> None:
+    """Raise ``ValueError`` unless ``interest`` and ``preferences`` name modes of this module."""
     if interest not in INTEREST_MODES:
         raise ValueError(f"interest must be one of {INTEREST_MODES}, got {interest!r}")
     if preferences not in PREFERENCE_MODES:
         raise ValueError(f"preferences must be one of {PREFERENCE_MODES}, got {preferences!r}")
-    if not (isinstance(min_temperature, (int, float)) and math.isfinite(min_temperature) and min_temperature > 0):
-        raise ValueError(f"min_temperature must be a positive finite float, got {min_temperature!r}")
-    if not (isinstance(max_temperature, (int, float)) and math.isfinite(max_temperature)):
-        raise ValueError(f"max_temperature must be a finite float, got {max_temperature!r}")
-    if min_temperature > max_temperature:
-        raise ValueError(f"min_temperature ({min_temperature}) must not exceed max_temperature ({max_temperature})")
 
 
 def relative_interest(interest: np.ndarray, scale: float) -> np.ndarray:

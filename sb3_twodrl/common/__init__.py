@@ -1,0 +1,1 @@
+"""Machinery shared by the 2D-RL algorithms: buffers, policies, reward split, rollout collection, checks."""
