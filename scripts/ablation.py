@@ -10,10 +10,11 @@ entropy bonus, SB3's ``MlpPolicy`` network):
 1. ``a2c``: SB3's A2C.
 2. ``a2c_fixed``: A2C at a fixed temperature (TwoDimA2C with its 2D parts off: no punishment
    stream, ``punishment_weight=0``; the equivalence test shows this is A2C), the temperature being
-   the mean temperature of the ``paper`` arm in the same run of this script.
-3. ``twod_fixed``: TwoDimA2C (two critics, the utility) at that fixed temperature: no interest.
+   the mean temperature of the ``paper`` arm in the same run of this script; raw preferences.
+3. ``twod_fixed``: TwoDimA2C (two critics, the utility) at that fixed temperature: no interest, raw preferences.
 4. ``paper``: TwoDimA2C with ``interest="paper", preferences="raw"``: eq. 9 as the paper writes it.
-5. ``default``: TwoDimA2C with its defaults.
+5. ``default``: TwoDimA2C with its defaults (``interest="relative", preferences="bounded"``).
+6. ``relative_raw``: the default's interest with raw preferences (which of the two changes does what).
 
 Protocol, fixed before any run: an epoch is ``--epoch-steps`` learning steps, then one test
 episode on each of ``--test-robots`` robots of a separately seeded batched office with the
@@ -45,7 +46,7 @@ from envs.nomad.batched import make_sb3_vec_env
 from sb3_twodrl import TwoDimA2C
 from sb3_twodrl.callbacks import EpisodeTracker, summarize_episodes
 
-ARMS = ("a2c", "a2c_fixed", "twod_fixed", "paper", "default")
+ARMS = ("a2c", "a2c_fixed", "twod_fixed", "paper", "default", "relative_raw")
 SHARED = dict(n_steps=5, gamma=0.9, gae_lambda=1.0, learning_rate=7e-4, ent_coef=0.0, device="cpu")
 TWO_DIM = dict(punishment_gamma=0.1, reward_split="info")
 METRICS = (
@@ -70,10 +71,12 @@ def make_model(arm: str, seed: int, temperature: float | None) -> A2C:
         return A2C("MlpPolicy", env, seed=seed, **SHARED)
     if arm == "a2c_fixed":
         degenerate = dict(punishment_weight=0.0, punishment_vf_coef=0.0, reward_split=whole_reward)
-        return TwoDimA2C("MlpPolicy", env, temperature=temperature, seed=seed, **degenerate, **SHARED)
+        return TwoDimA2C(
+            "MlpPolicy", env, temperature=temperature, preferences="raw", seed=seed, **degenerate, **SHARED
+        )
     if arm == "twod_fixed":
-        return TwoDimA2C("MlpPolicy", env, temperature=temperature, seed=seed, **TWO_DIM, **SHARED)
-    modes = dict(interest="paper", preferences="raw") if arm == "paper" else {}
+        return TwoDimA2C("MlpPolicy", env, temperature=temperature, preferences="raw", seed=seed, **TWO_DIM, **SHARED)
+    modes = {"paper": dict(interest="paper", preferences="raw"), "relative_raw": dict(preferences="raw")}.get(arm, {})
     return TwoDimA2C("MlpPolicy", env, seed=seed, **modes, **TWO_DIM, **SHARED)
 
 
