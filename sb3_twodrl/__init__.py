@@ -1,14 +1,15 @@
 """Two-dimensional evaluation reinforcement learning (2D-RL) for Stable-Baselines3."""
 
-from stable_baselines3 import A2C
+from stable_baselines3 import A2C, PPO
 from stable_baselines3.common.base_class import BaseAlgorithm
 
 from sb3_twodrl import callbacks
 from sb3_twodrl.a2c import TwoDimA2C
 from sb3_twodrl.callbacks import NavigationMetricsCallback
 from sb3_twodrl.common.policies import TwoDimActorCriticCnnPolicy, TwoDimActorCriticPolicy, TwoDimMultiInputPolicy
+from sb3_twodrl.ppo import TwoDimPPO
 
-ALGOS: dict[str, type[BaseAlgorithm]] = {"a2c": A2C, "twoda2c": TwoDimA2C}
+ALGOS: dict[str, type[BaseAlgorithm]] = {"a2c": A2C, "ppo": PPO, "twoda2c": TwoDimA2C, "twodppo": TwoDimPPO}
 """The algorithms by their rl-zoo3 names, the 2D-RL ones beside their stock baselines."""
 
 __all__ = [
@@ -18,5 +19,6 @@ __all__ = [
     "TwoDimActorCriticCnnPolicy",
     "TwoDimActorCriticPolicy",
     "TwoDimMultiInputPolicy",
+    "TwoDimPPO",
     "callbacks",
 ]

@@ -1,7 +1,7 @@
-"""rl-zoo3 integration: register TwoDimA2C as the algorithm ``twoda2c`` and give it an Optuna sampler.
+"""rl-zoo3 integration: register TwoDimA2C as ``twoda2c`` and TwoDimPPO as ``twodppo``, with Optuna samplers.
 
 >>> from sb3_twodrl.zoo import register_zoo
->>> register_zoo()  # then rl_zoo3.train.train() / rl_zoo3.enjoy.enjoy() accept --algo twoda2c
+>>> register_zoo()  # then rl_zoo3.train.train() / rl_zoo3.enjoy.enjoy() accept --algo twoda2c / twodppo
 
 rl-zoo3 looks algorithms up in ``rl_zoo3.utils.ALGOS`` and samplers in
 ``rl_zoo3.hyperparams_opt.HYPERPARAMS_SAMPLER`` / ``HYPERPARAMS_CONVERTER`` (the converter turns a
@@ -22,21 +22,22 @@ from pathlib import Path
 from typing import Any
 
 from sb3_twodrl.a2c import TwoDimA2C
-
-ALGO_KEY = "twoda2c"
+from sb3_twodrl.ppo import TwoDimPPO
 
 __all__ = [
-    "ALGO_KEY",
-    "convert_twoda2c_params",
+    "ZOO_ALGOS",
+    "convert_two_dim_params",
     "prepare_zoo_argv",
     "register_zoo",
     "run_zoo_entry",
+    "sample_two_dim_params",
     "sample_twoda2c_params",
+    "sample_twodppo_params",
 ]
 
 
-def convert_twoda2c_params(sampled_params: dict[str, Any]) -> dict[str, Any]:
-    """Turn sampled (or stored) trial parameters into TwoDimA2C constructor arguments."""
+def convert_two_dim_params(sampled_params: dict[str, Any]) -> dict[str, Any]:
+    """Turn sampled (or stored) trial parameters into TwoDimA2C or TwoDimPPO constructor arguments."""
     from rl_zoo3.hyperparams_opt import convert_onpolicy_params
 
     params = dict(sampled_params)
@@ -45,17 +46,31 @@ def convert_twoda2c_params(sampled_params: dict[str, Any]) -> dict[str, Any]:
     return convert_onpolicy_params(params)
 
 
-def sample_twoda2c_params(trial: Any, n_actions: int, n_envs: int, additional_args: dict) -> dict[str, Any]:
-    """Optuna search space of TwoDimA2C: A2C's space plus the 2D-RL hyperparameters.
-
-    The A2C part (``n_steps``, ``gamma``, ``gae_lambda``, ``learning_rate``, ``max_grad_norm``,
-    ``ent_coef``, network) is the same as rl-zoo3's A2C sampler, so the two algorithms are tuned on
-    equal terms. Added:
+def sample_two_dim_params(trial: Any) -> dict[str, Any]:
+    """The 2D-RL part of the search spaces (raw trial parameters, for :func:`convert_two_dim_params`).
 
     - ``punishment_gamma`` in [0, 0.99]: the paper's point is that punishment is short-sighted (0.1);
     - ``one_minus_punishment_gae_lambda`` in [1e-4, 1] (log): punishment GAE lambda in [0, 0.9999];
     - ``punishment_vf_coef`` in [0.1, 1] and ``punishment_weight`` in [0.25, 4] (log);
     - ``min_temperature`` in [0.1, 10] (log): the interest floor.
+    """
+    return {
+        "punishment_gamma": trial.suggest_float("punishment_gamma", 0.0, 0.99),
+        "one_minus_punishment_gae_lambda": trial.suggest_float(
+            "one_minus_punishment_gae_lambda", 0.0001, 1.0, log=True
+        ),
+        "punishment_vf_coef": trial.suggest_float("punishment_vf_coef", 0.1, 1.0),
+        "punishment_weight": trial.suggest_float("punishment_weight", 0.25, 4.0, log=True),
+        "min_temperature": trial.suggest_float("min_temperature", 0.1, 10.0, log=True),
+    }
+
+
+def sample_twoda2c_params(trial: Any, n_actions: int, n_envs: int, additional_args: dict) -> dict[str, Any]:
+    """Optuna search space of TwoDimA2C: A2C's space plus the 2D-RL hyperparameters.
+
+    The A2C part (``n_steps``, ``gamma``, ``gae_lambda``, ``learning_rate``, ``max_grad_norm``,
+    ``ent_coef``, network) is the same as rl-zoo3's A2C sampler, so the two algorithms are tuned on
+    equal terms; added: the 2D-RL space of :func:`sample_two_dim_params`.
     """
     n_steps = trial.suggest_categorical("n_steps", [5, 8, 16, 32, 64, 128, 256, 512])
     one_minus_gamma = trial.suggest_float("one_minus_gamma", 0.0001, 0.2, log=True)
@@ -65,11 +80,6 @@ def sample_twoda2c_params(trial: Any, n_actions: int, n_envs: int, additional_ar
     ent_coef = trial.suggest_float("ent_coef", 1e-8, 0.1, log=True)
     net_arch = trial.suggest_categorical("net_arch", ["small", "medium"])
     activation_fn = trial.suggest_categorical("activation_fn", ["tanh", "relu"])
-
-    punishment_gamma = trial.suggest_float("punishment_gamma", 0.0, 0.99)
-    one_minus_p_lambda = trial.suggest_float("one_minus_punishment_gae_lambda", 0.0001, 1.0, log=True)
-    punishment_vf_coef = trial.suggest_float("punishment_vf_coef", 0.1, 1.0)
-    punishment_weight = trial.suggest_float("punishment_weight", 0.25, 4.0, log=True)
 
     trial.set_user_attr("gamma", 1 - one_minus_gamma)
     sampled: dict[str, Any] = {
@@ -81,22 +91,36 @@ def sample_twoda2c_params(trial: Any, n_actions: int, n_envs: int, additional_ar
         "max_grad_norm": max_grad_norm,
         "net_arch": net_arch,
         "activation_fn": activation_fn,
-        "punishment_gamma": punishment_gamma,
-        "one_minus_punishment_gae_lambda": one_minus_p_lambda,
-        "punishment_vf_coef": punishment_vf_coef,
-        "punishment_weight": punishment_weight,
     }
-    sampled["min_temperature"] = trial.suggest_float("min_temperature", 0.1, 10.0, log=True)
-    return convert_twoda2c_params(sampled)
+    return convert_two_dim_params({**sampled, **sample_two_dim_params(trial)})
+
+
+def sample_twodppo_params(trial: Any, n_actions: int, n_envs: int, additional_args: dict) -> dict[str, Any]:
+    """Optuna search space of TwoDimPPO: rl-zoo3's PPO space (its own sampler) plus :func:`sample_two_dim_params`."""
+    from rl_zoo3.hyperparams_opt import sample_ppo_params
+
+    params = sample_ppo_params(trial, n_actions, n_envs, additional_args)
+    two_dim = sample_two_dim_params(trial)
+    two_dim["punishment_gae_lambda"] = 1.0 - two_dim.pop("one_minus_punishment_gae_lambda")
+    return {**params, **two_dim}
+
+
+ZOO_ALGOS: dict[str, type] = {"twoda2c": TwoDimA2C, "twodppo": TwoDimPPO}
+"""The 2D-RL algorithms by their rl-zoo3 names."""
+ZOO_SAMPLERS: dict[str, Callable[..., dict[str, Any]]] = {
+    "twoda2c": sample_twoda2c_params,
+    "twodppo": sample_twodppo_params,
+}
 
 
 def register_zoo() -> None:
-    """Register ``twoda2c`` in rl-zoo3's algorithm, sampler and converter tables (idempotent)."""
+    """Register ``twoda2c`` and ``twodppo`` in rl-zoo3's algorithm, sampler and converter tables (idempotent)."""
     from rl_zoo3 import hyperparams_opt, utils
 
-    utils.ALGOS[ALGO_KEY] = TwoDimA2C
-    hyperparams_opt.HYPERPARAMS_SAMPLER[ALGO_KEY] = sample_twoda2c_params
-    hyperparams_opt.HYPERPARAMS_CONVERTER[ALGO_KEY] = convert_twoda2c_params
+    for key, algo in ZOO_ALGOS.items():
+        utils.ALGOS[key] = algo
+        hyperparams_opt.HYPERPARAMS_SAMPLER[key] = ZOO_SAMPLERS[key]
+        hyperparams_opt.HYPERPARAMS_CONVERTER[key] = convert_two_dim_params
 
 
 def _has_option(argv: list[str], *names: str) -> bool:
@@ -118,7 +142,7 @@ def prepare_zoo_argv(
 ) -> list[str]:
     """Make rl-zoo3's command line ready for this project (used by ``scripts/train.py`` and ``enjoy.py``).
 
-    Registers ``twoda2c`` (:func:`register_zoo`), imports ``gym_packages`` that are installed (so
+    Registers ``twoda2c`` and ``twodppo`` (:func:`register_zoo`), imports ``gym_packages`` that are installed (so
     ``--gym-packages envs`` is optional), and, when ``hyperparams_dir`` is given and no
     ``-conf/--conf-file`` is, adds ``--conf-file <hyperparams_dir>/<algo>.yml`` if that file exists.
     """

@@ -1,11 +1,11 @@
-"""Training throughput of TwoDimA2C relative to stock A2C, measured side by side in one run.
+"""Training throughput of TwoDimA2C relative to A2C and of TwoDimPPO relative to PPO, measured side by side in one run.
 
     python scripts/bench_algo.py --env CartPole-v1 --n-envs 8 --steps 40000
 
-Both algorithms train on the same env id, n_envs, seed and A2C arguments in this process
-(DummyVecEnv, one torch thread). Throughput is env steps per second of this process's CPU
-time, so other load on a shared machine does not skew it; runs alternate (A2C, TwoDimA2C,
-A2C, ...) and the median of the repeats is reported.
+Each pair trains on the same env id, n_envs, seed and stock arguments (the algorithms' defaults) in this
+process (DummyVecEnv, one torch thread). Throughput is env steps per second of this process's CPU
+time, so other load on a shared machine does not skew it; runs alternate (A2C, TwoDimA2C, PPO,
+TwoDimPPO, A2C, ...) and the median of the repeats is reported.
 """
 
 import argparse
@@ -13,12 +13,15 @@ import statistics
 import time
 
 import torch as th
-from stable_baselines3 import A2C
+from stable_baselines3 import A2C, PPO
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.env_util import make_vec_env
 
 import envs  # noqa: F401  (registers the Nomad office ids)
-from sb3_twodrl import TwoDimA2C
+from sb3_twodrl import TwoDimA2C, TwoDimPPO
+
+PAIRS: dict[str, tuple[type[BaseAlgorithm], type[BaseAlgorithm]]] = {"a2c": (A2C, TwoDimA2C), "ppo": (PPO, TwoDimPPO)}
+TARGET = 0.85
 
 
 def steps_per_second(algo: type[BaseAlgorithm], env_id: str, n_envs: int, steps: int, seed: int) -> float:
@@ -35,19 +38,23 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=40_000)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--pairs", nargs="+", choices=sorted(PAIRS), default=["a2c", "ppo"])
     args = parser.parse_args()
     th.set_num_threads(1)
 
-    rates: dict[str, list[float]] = {"A2C": [], "TwoDimA2C": []}
+    algos = [algo for pair in args.pairs for algo in PAIRS[pair]]
+    rates: dict[str, list[float]] = {algo.__name__: [] for algo in algos}
     for _ in range(args.repeats):
-        for algo in (A2C, TwoDimA2C):
+        for algo in algos:
             rates[algo.__name__].append(steps_per_second(algo, args.env, args.n_envs, args.steps, args.seed))
-    a2c, twodim = (statistics.median(rates[name]) for name in ("A2C", "TwoDimA2C"))
+    medians = {name: statistics.median(runs) for name, runs in rates.items()}
     print(f"env={args.env} n_envs={args.n_envs} steps={args.steps} seed={args.seed} repeats={args.repeats}")
-    for name, median in (("A2C", a2c), ("TwoDimA2C", twodim)):
-        runs = ", ".join(f"{rate:.0f}" for rate in rates[name])
-        print(f"{name:10s} {median:10.0f} env steps per CPU second  (runs: {runs})")
-    print(f"ratio TwoDimA2C / A2C = {twodim / a2c:.3f}  (target >= 0.85)")
+    for name, runs in rates.items():
+        listed = ", ".join(f"{rate:.0f}" for rate in runs)
+        print(f"{name:10s} {medians[name]:10.0f} env steps per CPU second  (runs: {listed})")
+    for pair in args.pairs:
+        stock, two_dim = (algo.__name__ for algo in PAIRS[pair])
+        print(f"ratio {two_dim} / {stock} = {medians[two_dim] / medians[stock]:.3f}  (target >= {TARGET})")
 
 
 if __name__ == "__main__":

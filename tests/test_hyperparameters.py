@@ -26,10 +26,27 @@ from sb3_twodrl import TwoDimA2C
         (dict(temperature="hot"), "temperature"),
         (dict(temperature=-1.0), "temperature"),
         (dict(reward_split=3), "reward_split"),
+        (dict(n_steps=0), "n_steps"),
+        (dict(max_temperature="10"), "max_temperature"),
     ],
 )
 def test_bad_hyperparameter(kwargs: dict[str, Any], name: str) -> None:
     with pytest.raises(ValueError, match=name):
+        TwoDimA2C("MlpPolicy", "CartPole-v1", **kwargs)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        (dict(punishment_gamma="a"), "punishment_gamma"),
+        (dict(gamma=None), "gamma"),
+        (dict(punishment_weight=True), "punishment_weight"),
+        (dict(punishment_vf_coef="0.5"), "punishment_vf_coef"),
+        (dict(n_steps=5.0), "n_steps"),
+    ],
+)
+def test_a_hyperparameter_of_the_wrong_type_is_a_type_error(kwargs: dict[str, Any], name: str) -> None:
+    with pytest.raises(TypeError, match=name):
         TwoDimA2C("MlpPolicy", "CartPole-v1", **kwargs)
 
 

@@ -93,3 +93,22 @@ def test_split_survives_save_and_load(tmp_path: Path) -> None:
 def test_unknown_mode_is_rejected() -> None:
     with pytest.raises(ValueError, match="reward_split"):
         TwoDimA2C("MlpPolicy", "CartPole-v1", reward_split="net")
+
+
+@pytest.mark.parametrize(("mode", "key"), [("info", "punishment"), ("cost", "cost")])
+def test_a_missing_info_key_names_the_mode_and_the_key(mode: str, key: str) -> None:
+    model = TwoDimA2C("MlpPolicy", ScriptedFeedbackEnv([(1.0, {"other": 0.0})]), n_steps=4, reward_split=mode)
+    with pytest.raises(ValueError, match=rf'reward_split="{mode}" needs info\["{key}"\].*env 0.*timestep 1'):
+        model.learn(4)
+
+
+@pytest.mark.parametrize("value", ["high", [0.5, 0.5], {"p": 1.0}])
+def test_an_info_value_that_is_no_number_is_an_error(value: Any) -> None:
+    with pytest.raises(ValueError, match=r'info\["punishment"\] must be a real number'):
+        split_rewards(make_reward_split("info"), np.zeros(2), [{"punishment": 0.0}, {"punishment": value}], 1)
+
+
+@pytest.mark.parametrize("result", [1.0, (1.0, 2.0, 3.0), ("a", 0.0)])
+def test_a_callable_that_returns_no_pair_is_an_error(result: Any) -> None:
+    with pytest.raises(ValueError, match="must return a pair"):
+        split_rewards(make_reward_split(lambda r, info: result), np.zeros(2), [{}, {}], 1)

@@ -6,6 +6,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch as th
+from stable_baselines3 import A2C
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.evaluation import evaluate_policy
@@ -153,3 +154,16 @@ def test_temperature_settings_are_algorithm_arguments(tmp_path: Path) -> None:
     model.save(tmp_path / "model.zip")
     loaded = TwoDimA2C.load(tmp_path / "model.zip", policy_kwargs=dict(net_arch=[32]))
     assert loaded.max_temperature == loaded.policy.max_temperature == 3.0
+
+
+def test_load_with_custom_objects(tmp_path: Path) -> None:
+    TwoDimA2C("MlpPolicy", "CartPole-v1", seed=0).save(tmp_path / "model.zip")
+    loaded = TwoDimA2C.load(tmp_path / "model.zip", custom_objects=dict(punishment_gamma=0.4, learning_rate=1e-3))
+    assert loaded.punishment_gamma == loaded.rollout_buffer.punishment_gamma == 0.4
+    assert loaded.learning_rate == 1e-3
+
+
+def test_loading_a_stock_a2c_file_says_so(tmp_path: Path) -> None:
+    A2C("MlpPolicy", "CartPole-v1", seed=0).save(tmp_path / "a2c.zip")
+    with pytest.raises(ValueError, match="saved by another algorithm"):
+        TwoDimA2C.load(tmp_path / "a2c.zip")

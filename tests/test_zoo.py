@@ -13,13 +13,19 @@ import yaml
 
 import envs  # noqa: F401  (registers the Nomad office ids)
 import tests.toy_nav  # noqa: F401  (registers ToyNav-v0)
-from sb3_twodrl import TwoDimA2C
-from sb3_twodrl.zoo import ALGO_KEY, convert_twoda2c_params, register_zoo, sample_twoda2c_params
+from sb3_twodrl.zoo import (
+    ZOO_ALGOS,
+    ZOO_SAMPLERS,
+    convert_two_dim_params,
+    register_zoo,
+    sample_twoda2c_params,
+    sample_twodppo_params,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 HYPERPARAMS = ROOT / "scripts" / "hyperparams"
 ZOO_ENVS = ["NomadOffice-v0", "NomadOfficeMemorable-v0", "CartPole-v1", "Acrobot-v1"]
-ALGOS = ["a2c", "twoda2c"]
+ALGOS = ["a2c", "twoda2c", "ppo", "twodppo"]
 
 
 def run_script(name: str, argv: list[str], monkeypatch) -> None:
@@ -36,8 +42,10 @@ def toy_conf(tmp_path: Path, algo: str) -> Path:
         "n_steps": 5,
         "callback": ["sb3_twodrl.callbacks.NavigationMetricsCallback"],
     }
-    if algo == "twoda2c":
+    if algo.startswith("twod"):
         entry["punishment_gamma"] = 0.1
+    if algo.endswith("ppo"):
+        entry.update(n_steps=32, batch_size=32, n_epochs=2)
     path = tmp_path / f"{algo}_toy.yml"
     path.write_text(yaml.safe_dump({"ToyNav-v0": entry}))
     return path
@@ -61,7 +69,8 @@ def test_yaml_covers_the_envs_for_both_algorithms():
             assert env_id in conf, (algo, env_id)
             assert "sb3_twodrl.callbacks.NavigationMetricsCallback" in conf[env_id]["callback"]
         assert conf["NomadOffice-v0"]["gamma"] == 0.9
-    assert yaml.safe_load((HYPERPARAMS / "twoda2c.yml").read_text())["NomadOffice-v0"]["punishment_gamma"] == 0.1
+    for algo in ("twoda2c", "twodppo"):
+        assert yaml.safe_load((HYPERPARAMS / f"{algo}.yml").read_text())["NomadOffice-v0"]["punishment_gamma"] == 0.1
 
 
 @pytest.mark.parametrize("algo", ALGOS)
@@ -77,14 +86,14 @@ def test_train_tiny_budget_leaves_model_and_tensorboard(algo, tmp_path, monkeypa
     assert list((tmp_path / "logs" / algo / "ToyNav-v0_1").glob("rl_model_*_steps.zip"))  # --save-freq
     assert (tmp_path / "logs" / algo / "ToyNav-v0_1" / "evaluations.npz").is_file()  # --eval-freq
     register_zoo()
-    from rl_zoo3.utils import ALGOS as ZOO_ALGOS
+    from rl_zoo3.utils import ALGOS as RL_ZOO_ALGOS
 
-    model = ZOO_ALGOS[algo].load(model_path, device="cpu")
+    model = RL_ZOO_ALGOS[algo].load(model_path, device="cpu")
     assert model.num_timesteps >= 200
     tags = scalar_tags(tmp_path / "tb")
     for key in ("goal_rate", "reward_per_step", "shortcut_share", "detour_share", "collision_rate"):
         assert f"rollout/{key}" in tags
-    if algo == "twoda2c":
+    if algo.startswith("twod"):
         assert "train/interest" in tags
     # enjoy replays it (no rendering in tests)
     run_script(
@@ -109,7 +118,7 @@ def test_shipped_hyperparams_train(algo, env_id, tmp_path, monkeypatch):
     assert (tmp_path / "logs" / algo / f"{env_id}_1" / f"{env_id}.zip").is_file()
 
 
-@pytest.mark.parametrize("algo", ALGOS)
+@pytest.mark.parametrize("algo", ["a2c", "twoda2c", "twodppo"])
 def test_two_trial_optuna_study_with_shared_storage(algo, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     storage = str(tmp_path / "study.log")  # journal file: several machines can share it (or an RDB URL)
@@ -126,24 +135,27 @@ def test_two_trial_optuna_study_with_shared_storage(algo, tmp_path, monkeypatch)
     assert list((tmp_path / "logs" / algo).glob("report_ToyNav-v0_*.csv"))
 
 
-def test_twoda2c_sampler_space():
+@pytest.mark.parametrize("sampler", [sample_twoda2c_params, sample_twodppo_params])
+def test_two_dim_sampler_space(sampler):
     study = optuna.create_study(sampler=optuna.samplers.RandomSampler(seed=0))
     trial = study.ask()
-    params = sample_twoda2c_params(trial, 4, 2, {})
+    params = sampler(trial, 4, 2, {})
     assert 0.0 <= params["punishment_gamma"] <= 0.99
     assert 0.0 <= params["punishment_gae_lambda"] <= 1.0
     assert params["punishment_weight"] > 0 and params["punishment_vf_coef"] > 0
+    assert 0.1 <= params["min_temperature"] <= 10.0
     assert 0.8 <= params["gamma"] < 1.0
     assert "net_arch" in params["policy_kwargs"]
     # the converter maps a stored trial's params to the same constructor arguments (--trial-id)
-    assert convert_twoda2c_params(trial.params) == params
+    assert convert_two_dim_params(trial.params) == params
 
 
 def test_register_zoo_tables():
     from rl_zoo3.hyperparams_opt import HYPERPARAMS_CONVERTER, HYPERPARAMS_SAMPLER
-    from rl_zoo3.utils import ALGOS as ZOO_ALGOS
+    from rl_zoo3.utils import ALGOS as RL_ZOO_ALGOS
 
     register_zoo()
-    assert ZOO_ALGOS[ALGO_KEY] is TwoDimA2C
-    assert HYPERPARAMS_SAMPLER[ALGO_KEY] is sample_twoda2c_params
-    assert HYPERPARAMS_CONVERTER[ALGO_KEY] is convert_twoda2c_params
+    for key, algo in ZOO_ALGOS.items():
+        assert RL_ZOO_ALGOS[key] is algo
+        assert HYPERPARAMS_SAMPLER[key] is ZOO_SAMPLERS[key]
+        assert HYPERPARAMS_CONVERTER[key] is convert_two_dim_params

@@ -51,9 +51,13 @@ def default_map_path() -> Path:
 
 
 def _number_list(value: object, length: int, what: str, source: str) -> tuple[float, ...]:
-    if not isinstance(value, list) or len(value) != length or not all(isinstance(v, int | float) for v in value):
+    numbers = isinstance(value, list) and all(isinstance(v, int | float) and not isinstance(v, bool) for v in value)
+    if not numbers or len(value) != length:
         raise ValueError(f"map file {source}: {what} must be a list of {length} numbers, got {value!r}")
-    out = tuple(float(v) for v in value)
+    try:
+        out = tuple(float(v) for v in value)
+    except OverflowError:
+        out = (np.inf,)
     if not all(np.isfinite(out)):
         raise ValueError(f"map file {source}: {what} must be finite, got {value!r}")
     return out
@@ -93,6 +97,8 @@ def load_map(path: str | Path | None = None) -> OfficeMap:
         raise ValueError(f"map file {source}: walls must be a non-empty list of segments, got {data['walls']!r}")
     for i, wall in enumerate(data["walls"]):
         segments.append(_number_list(wall, 4, f"walls[{i}]", source))
+    if not isinstance(data.get("obstacles", []), list):
+        raise ValueError(f"map file {source}: obstacles must be a list of polygons, got {data['obstacles']!r}")
     for i, poly in enumerate(data.get("obstacles", [])):
         if not isinstance(poly, list) or len(poly) < 3:
             raise ValueError(f"map file {source}: obstacles[{i}] must list at least 3 vertices, got {poly!r}")

@@ -6,7 +6,8 @@ import torch as th
 from gymnasium import spaces
 from stable_baselines3 import A2C
 from stable_baselines3.common.buffers import RolloutBuffer
-from stable_baselines3.common.policies import BasePolicy
+from stable_baselines3.common.distributions import Distribution
+from stable_baselines3.common.policies import ActorCriticPolicy, BasePolicy
 from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedule
 from stable_baselines3.common.utils import explained_variance
 from torch.nn import functional as F
@@ -39,7 +40,7 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
     :param punishment_vf_coef: loss weight of the punishment critic; None: ``vf_coef``
     :param punishment_weight: ``w`` in the utility ``A_R - w * A_P`` (eq. 1 is ``w = 1``)
     :param reward_split: how ``(reward, info)`` becomes ``(r_R, r_P)``: ``"auto"``, ``"info"``,
-        ``"cost"``, ``"sign"`` or a callable (see ``sb3_twodrl.splitting``)
+        ``"cost"``, ``"sign"`` or a callable (see ``sb3_twodrl.common.splitting``)
     :param temperature: ``"interest"`` (eq. 9, ``T`` set by the interest) or a fixed positive temperature
     :param interest: how the interest sets ``T``: ``"paper"`` (eq. 9 literally: ``T = delta+`` of the
         transition into the state), ``"relative"`` (``delta+`` over its running mean) or ``"learned"``
@@ -62,7 +63,7 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
 
     def __init__(
         self,
-        policy: str | type[TwoDimActorCriticPolicy],
+        policy: str | type[ActorCriticPolicy],
         env: GymEnv | str,
         learning_rate: float | Schedule = 7e-4,
         n_steps: int = 5,
@@ -141,6 +142,10 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
             device=device,
             _init_setup_model=_init_setup_model,
         )
+
+    def _rollout_log_probs(self, latent_pi: th.Tensor, distribution: Distribution, actions: th.Tensor) -> th.Tensor:
+        """A2C never reads ``old_log_prob``: the tempered distribution's, which costs no second distribution."""
+        return distribution.log_prob(actions)
 
     def train(self) -> None:
         """One gradient step: actor on the utility (eq. 1, 10), each critic on its own TD(lambda) target."""

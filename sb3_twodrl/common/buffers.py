@@ -11,8 +11,8 @@ from stable_baselines3.common.vec_env import VecNormalize
 
 
 class TwoDimRolloutBufferSamples(NamedTuple):
-    """SB3's rollout samples (``advantages`` being the utility), the punishment critic's target and
-    the interest ``delta+`` of each sample's transition (the target of the ``"learned"`` interest head)."""
+    """SB3's rollout samples (``advantages`` being the utility) plus the punishment critic's old values and
+    target, and the interest ``delta+`` of each sample's transition (the ``"learned"`` interest head's target)."""
 
     observations: PyTorchObs
     actions: th.Tensor
@@ -20,6 +20,7 @@ class TwoDimRolloutBufferSamples(NamedTuple):
     old_log_prob: th.Tensor
     advantages: th.Tensor
     returns: th.Tensor
+    old_punishment_values: th.Tensor
     punishment_returns: th.Tensor
     interests: th.Tensor
 
@@ -149,9 +150,13 @@ class TwoDimBufferMixin:
 
     def _get_samples(self, batch_inds: np.ndarray, env: VecNormalize | None = None) -> TwoDimRolloutBufferSamples:
         samples = super()._get_samples(batch_inds, env)  # type: ignore[misc]
-        punishment_returns = self.to_torch(self.punishment_returns[batch_inds].flatten())  # type: ignore[attr-defined]
-        interests = self.to_torch(self.interests[batch_inds].flatten())  # type: ignore[attr-defined]
-        return TwoDimRolloutBufferSamples(*samples, punishment_returns=punishment_returns, interests=interests)
+        to_torch = self.to_torch  # type: ignore[attr-defined]
+        return TwoDimRolloutBufferSamples(
+            *samples,
+            old_punishment_values=to_torch(self.punishment_values[batch_inds].flatten()),
+            punishment_returns=to_torch(self.punishment_returns[batch_inds].flatten()),
+            interests=to_torch(self.interests[batch_inds].flatten()),
+        )
 
 
 class TwoDimRolloutBuffer(TwoDimBufferMixin, RolloutBuffer):

@@ -13,6 +13,7 @@ import torch as th
 from gymnasium import spaces
 from stable_baselines3.common.buffers import RolloutBuffer
 from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.distributions import Distribution
 from stable_baselines3.common.logger import Logger
 from stable_baselines3.common.policies import BasePolicy
 from stable_baselines3.common.utils import obs_as_tensor
@@ -157,6 +158,16 @@ class TwoDimOnPolicyMixin:
             return np.zeros(self.n_envs, dtype=np.float32)
         return carried[1]
 
+    def _rollout_log_probs(self, latent_pi: th.Tensor, distribution: Distribution, actions: th.Tensor) -> th.Tensor:
+        """The ``old_log_prob`` stored with each action: its log-probability under the raw preferences (``T = 1``).
+
+        Eq. 10 updates the preferences whatever the temperature the action was drawn at, so the
+        policy being optimised is the untempered one: PPO's ratio compares it with itself before the
+        update (1 at the first epoch), not with the tempered sampling distribution.
+        ``distribution`` (tempered, from the same latent) is unused here.
+        """
+        return self.policy._get_action_dist_from_latent(latent_pi).log_prob(actions)
+
     def collect_rollouts(
         self,
         env: VecEnv,
@@ -193,7 +204,7 @@ class TwoDimOnPolicyMixin:
             with th.no_grad():
                 distribution = self.policy.tempered_distribution(latent_pi, inverse_temperature)
                 actions = distribution.get_actions()
-                log_probs = distribution.log_prob(actions)
+                log_probs = self._rollout_log_probs(latent_pi, distribution, actions)
             actions = actions.cpu().numpy().reshape((-1, *self.action_space.shape))  # type: ignore[misc]
 
             clipped_actions = actions

@@ -18,19 +18,37 @@ BatchSplit = Callable[[np.ndarray, Sequence[dict[str, Any]]], tuple[np.ndarray, 
 SPLIT_MODES = ("auto", "info", "cost", "sign")
 
 
-def _info_values(infos: Sequence[dict[str, Any]], key: str) -> np.ndarray:
-    return np.array([info[key] for info in infos], dtype=np.float64)
+def _info_values(infos: Sequence[dict[str, Any]], key: str, mode: str) -> np.ndarray:
+    """``info[key]`` of every env as float64.
+
+    :raises ValueError: naming the mode, the key and the env if one is missing, or if a value is not
+        a real scalar (a string, even ``"0"``, None or a bool is an error, not a number)
+    """
+    try:
+        values = np.array([info[key] for info in infos])
+    except KeyError:
+        idx = next(i for i, info in enumerate(infos) if key not in info)
+        raise ValueError(
+            f'reward_split="{mode}" needs info["{key}"] at every step, but env {idx}\'s info has only the keys '
+            f'{sorted(infos[idx])} (use another reward_split, e.g. "sign" or a callable)'
+        ) from None
+    except ValueError:  # ragged sequences
+        values = np.empty(0)
+    if values.dtype.kind not in "iuf" or values.shape != (len(infos),):
+        bad = [info[key] for info in infos]
+        raise ValueError(f'reward_split="{mode}": info["{key}"] must be a real number in every env, got {bad!r}')
+    return values.astype(np.float64, copy=False)
 
 
 def split_info(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
     """The scalar reward is the net ``r_R - r_P`` and ``info["punishment"]`` holds ``r_P``."""
-    punishments = _info_values(infos, "punishment")
+    punishments = _info_values(infos, "punishment", "info")
     return rewards + punishments, punishments
 
 
 def split_cost(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
     """Safety-Gymnasium convention: ``r_R = reward``, ``r_P = info["cost"]``."""
-    return rewards, _info_values(infos, "cost")
+    return rewards, _info_values(infos, "cost", "cost")
 
 
 def split_sign(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
@@ -64,7 +82,13 @@ def make_reward_split(reward_split: str | RewardSplit) -> BatchSplit:
 
         def split_each(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
             pairs = [reward_split(float(r), info) for r, info in zip(rewards, infos, strict=True)]
-            return tuple(np.array(pairs, dtype=np.float64).reshape(-1, 2).T)  # type: ignore[return-value]
+            try:
+                split = np.array(pairs, dtype=np.float64)
+            except (TypeError, ValueError):
+                split = np.empty(0)
+            if split.shape != (len(infos), 2):
+                raise ValueError(f"reward_split callable must return a pair of real numbers (r_R, r_P), got {pairs!r}")
+            return split[:, 0], split[:, 1]
 
         return split_each
     raise ValueError(
@@ -99,11 +123,15 @@ def split_rewards(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Split one vectorised step's rewards into float32 arrays ``(r_R, r_P)``.
 
-    :raises ValueError: if a reward is not finite or a punishment is negative or not finite (after
+    :raises ValueError: if the split cannot be made (a missing ``info`` key, a value that is not a
+        number), or if a reward is not finite or a punishment is negative or not finite (after
         the cast to the buffer's float32: a finite 1e300 is an error, not a silent infinity),
         naming the env index and the timestep where it appeared.
     """
-    reward_r, reward_p = reward_split(rewards.astype(np.float32, copy=False), infos)
+    try:
+        reward_r, reward_p = reward_split(rewards.astype(np.float32, copy=False), infos)
+    except ValueError as error:
+        raise ValueError(f"{error} (at timestep {timestep})") from error
     reward_r, reward_p = reward_r.astype(np.float32, copy=False), reward_p.astype(np.float32, copy=False)
     if not _all_valid(reward_r, reward_p):
         idx = int(np.flatnonzero(~_valid(reward_r, reward_p))[0])
