@@ -26,6 +26,9 @@ from stable_baselines3.common.evaluation import evaluate_policy
 from envs.nomad.batched import make_sb3_vec_env
 from sb3_twodrl import NavigationMetricsCallback, TwoDimA2C
 
+PAPER = dict(interest="paper", preferences="raw")
+"""The floor study is of eq. 9 taken literally (the default interest is relative: README, "Design notes")."""
+
 SETTINGS = {
     "CartPole-v1": dict(steps=100_000, threshold=400.0),
     "NomadOffice-v0": dict(steps=200_000, threshold=0.7),
@@ -61,7 +64,8 @@ def run(env_id: str, floor: float, seed: int) -> Run:
     th.set_num_threads(1)
     above = AboveFloor(floor)
     if env_id == "CartPole-v1":
-        model = TwoDimA2C("MlpPolicy", make_vec_env(env_id, n_envs=8, seed=seed), min_temperature=floor, seed=seed)
+        env = make_vec_env(env_id, n_envs=8, seed=seed)
+        model = TwoDimA2C("MlpPolicy", env, min_temperature=floor, seed=seed, **PAPER)
         model.learn(SETTINGS[env_id]["steps"], callback=above)
         score, _ = evaluate_policy(model, make_vec_env(env_id, n_envs=1, seed=seed + 100), n_eval_episodes=20)
     else:
@@ -74,6 +78,7 @@ def run(env_id: str, floor: float, seed: int) -> Run:
             reward_split="info",
             min_temperature=floor,
             seed=seed,
+            **PAPER,
         )
         model.learn(SETTINGS[env_id]["steps"], callback=[above, metrics])
         score = metrics.metrics()["goal_rate"]

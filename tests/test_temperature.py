@@ -1,6 +1,7 @@
 """Interest as the softmax temperature (eq. 2, 9) and the actor's update (eq. 10)."""
 
 import copy
+from typing import Any
 
 import numpy as np
 import pytest
@@ -24,7 +25,7 @@ def action_probabilities(model: TwoDimA2C, interest: float) -> np.ndarray:
 @pytest.fixture
 def biased_model() -> TwoDimA2C:
     """A model whose actor strongly prefers action 2, whatever the state."""
-    model = TwoDimA2C("MlpPolicy", LatticeCorridor(), seed=0)
+    model = TwoDimA2C("MlpPolicy", LatticeCorridor(), interest="paper", preferences="raw", seed=0)
     with th.no_grad():
         model.policy.action_net.bias.copy_(th.tensor([0.0, 0.5, 1.0, 0.2]))
     return model
@@ -74,21 +75,37 @@ def test_actor_update_does_not_depend_on_the_temperature() -> None:
         assert th.equal(updated[1][name], tensor), name
 
 
-def test_default_run_does_not_freeze() -> None:
-    """With the default floor, learning keeps exploring and finds the goal; no episode wanders to the time limit."""
-    env = make_vec_env(lambda: TimeLimit(LatticeCorridor(8, 4), 60), n_envs=4, seed=0)
-    model = TwoDimA2C("MlpPolicy", env, gamma=0.9, seed=0).learn(8_000)
+def outcomes(model: TwoDimA2C, deterministic: bool, episodes: int = 30) -> list[str]:
     test_env = TimeLimit(LatticeCorridor(8, 4), 60)
-    outcomes = []
-    for episode in range(30):
+    ends = []
+    for episode in range(episodes):
         obs, _ = test_env.reset(seed=1_000 + episode)
         terminated = truncated = False
         while not (terminated or truncated):
-            action, _ = model.predict(obs, deterministic=False)
+            action, _ = model.predict(obs, deterministic=deterministic)
             obs, _, terminated, truncated, info = test_env.step(action)
-        outcomes.append("goal" if info["is_success"] else "time limit" if truncated else "collision")
-    assert outcomes.count("time limit") == 0
-    assert outcomes.count("goal") >= 20
+        ends.append("goal" if info["is_success"] else "time limit" if truncated else "collision")
+    return ends
+
+
+def lattice_model(**kwargs: Any) -> TwoDimA2C:
+    env = make_vec_env(lambda: TimeLimit(LatticeCorridor(8, 4), 60), n_envs=4, seed=0)
+    return TwoDimA2C("MlpPolicy", env, gamma=0.9, seed=0, **kwargs).learn(8_000)
+
+
+def test_paper_floor_run_does_not_freeze() -> None:
+    """With the floor, eq. 9 taken literally keeps exploring and finds the goal; no episode reaches the time limit."""
+    ends = outcomes(lattice_model(interest="paper", preferences="raw"), deterministic=False)
+    assert ends.count("time limit") == 0
+    assert ends.count("goal") >= 20
+
+
+def test_default_run_does_not_freeze() -> None:
+    """The default learns the way to the goal (its greedy policy takes it) and its stochastic policy,
+    which explores more than the paper mode's at the floor, never wanders to the time limit."""
+    model = lattice_model()
+    assert outcomes(model, deterministic=False).count("time limit") == 0
+    assert outcomes(model, deterministic=True, episodes=1) == ["goal"]
 
 
 def test_stochastic_predict_uses_the_running_interest(biased_model: TwoDimA2C) -> None:

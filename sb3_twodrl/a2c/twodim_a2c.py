@@ -27,10 +27,10 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
 
     A reward critic ``V_R`` (discount ``gamma``) and a punishment critic ``V_P`` (discount
     ``punishment_gamma``) learn the two evaluations (eq. 3-8). The actor follows the utility
-    ``A_R - punishment_weight * A_P`` (eq. 1, 10, with GAE per stream) and, in ``"interest"`` mode,
-    acts with the softmax temperature ``T = |delta_R| + |delta_P|`` of the transition that led each
-    env into its current state (eq. 2, 9), clamped to ``[min_temperature, max_temperature]``; an
-    interest of exactly 0 (an episode's first step) means uniform random actions.
+    ``A_R - punishment_weight * A_P`` (eq. 1, 10, with GAE per stream) and, with
+    ``temperature="interest"``, acts with a softmax temperature set by the interest
+    ``delta+ = |delta_R| + |delta_P|`` (eq. 2, 9) as the ``interest`` and ``preferences`` modes say
+    (:mod:`sb3_twodrl.common.interest`), clamped to ``[min_temperature, max_temperature]``.
 
     Every argument of SB3's ``A2C`` keeps its meaning and default (``gamma`` discounts the reward
     stream); see ``A2C`` for them.
@@ -41,7 +41,13 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
     :param punishment_weight: ``w`` in the utility ``A_R - w * A_P`` (eq. 1 is ``w = 1``)
     :param reward_split: how ``(reward, info)`` becomes ``(r_R, r_P)``: ``"auto"``, ``"info"``,
         ``"cost"``, ``"sign"`` or a callable (see ``sb3_twodrl.common.splitting``)
-    :param temperature: ``"interest"`` (eq. 9 with ``T = delta+``) or a fixed positive temperature
+    :param temperature: ``"interest"`` (eq. 9, ``T`` set by the interest) or a fixed positive temperature
+    :param interest: how the interest sets ``T``: ``"paper"`` (eq. 9 literally: ``T = delta+`` of the
+        transition into the state), ``"relative"`` (``delta+`` over its running mean) or ``"learned"``
+        (a head's ``E[delta+ | s]`` over the running mean of ``delta+``)
+    :param preferences: ``"raw"`` (eq. 9 literally) or ``"bounded"`` (preferences divided by
+        ``max(1, their sd over the actions)``, so that ``min_temperature`` bounds how greedy actions get)
+    :param interest_coef: loss weight of the ``"learned"`` mode's interest head (its target is ``delta+``)
     :param min_temperature: floor of the interest temperature; keeps the policy from freezing
         into argmax once the critics settle and the interest collapses toward 0
     :param max_temperature: ceiling of the interest temperature
@@ -87,6 +93,9 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
         temperature: str | float = "interest",
         min_temperature: float = 0.5,
         max_temperature: float = 10.0,
+        interest: str = "relative",
+        preferences: str = "bounded",
+        interest_coef: float = 0.5,
         _init_setup_model: bool = True,
     ):
         policy = self._init_two_dim(
@@ -104,6 +113,9 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
             temperature=temperature,
             min_temperature=min_temperature,
             max_temperature=max_temperature,
+            interest=interest,
+            preferences=preferences,
+            interest_coef=interest_coef,
         )
         super().__init__(
             policy,
@@ -145,7 +157,7 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
             if isinstance(self.action_space, spaces.Discrete):
                 actions = actions.long().flatten()
 
-            values, punishment_values, log_prob, entropy = self.policy.evaluate_actions_two_dim(
+            values, punishment_values, predicted, log_prob, entropy = self.policy.evaluate_actions_two_dim(
                 rollout_data.observations, actions
             )
             advantages = rollout_data.advantages
@@ -163,16 +175,25 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
                 + self.vf_coef * value_loss
                 + self.punishment_vf_coef * punishment_value_loss
             )
+            interest_loss = None
+            if predicted is not None:  # the head learns E[delta+ | s] (sb3_twodrl.common.interest, "learned")
+                interest_loss = F.mse_loss(rollout_data.interests, predicted.flatten())
+                loss = loss + self.interest_coef * interest_loss
             self.policy.optimizer.zero_grad()
             loss.backward()
             th.nn.utils.clip_grad_norm_(self.policy.parameters(), self.max_grad_norm)
             self.policy.optimizer.step()
 
         self._n_updates += 1
-        self._log_train(policy_loss, value_loss, punishment_value_loss, entropy_loss)
+        self._log_train(policy_loss, value_loss, punishment_value_loss, entropy_loss, interest_loss)
 
     def _log_train(
-        self, policy_loss: th.Tensor, value_loss: th.Tensor, punishment_value_loss: th.Tensor, entropy_loss: th.Tensor
+        self,
+        policy_loss: th.Tensor,
+        value_loss: th.Tensor,
+        punishment_value_loss: th.Tensor,
+        entropy_loss: th.Tensor,
+        interest_loss: th.Tensor | None = None,
     ) -> None:
         self.logger.record("train/n_updates", self._n_updates, exclude="tensorboard")
         # A2C's own key as A2C computes it
@@ -185,7 +206,7 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
         self.logger.record("train/value_loss", value_loss.item())
         if hasattr(self.policy, "log_std"):
             self.logger.record("train/std", th.exp(self.policy.log_std).mean().item())
-        self._log_two_dim(punishment_value_loss.item())
+        self._log_two_dim(punishment_value_loss.item(), None if interest_loss is None else interest_loss.item())
 
     def learn(
         self: SelfTwoDimA2C,

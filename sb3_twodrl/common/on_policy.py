@@ -20,6 +20,7 @@ from stable_baselines3.common.utils import obs_as_tensor
 from stable_baselines3.common.vec_env import VecEnv
 
 from sb3_twodrl.common.buffers import TwoDimBufferMixin, TwoDimDictRolloutBuffer, TwoDimRolloutBuffer
+from sb3_twodrl.common.interest import check_interest_modes
 from sb3_twodrl.common.policies import TwoDimPolicyMixin, check_temperature, two_dim_policy_class
 from sb3_twodrl.common.splitting import RewardSplit, make_reward_split, split_rewards
 from sb3_twodrl.common.utils import fast_explained_variance, fast_mean, flat
@@ -69,6 +70,9 @@ class TwoDimOnPolicyMixin:
         temperature: str | float,
         min_temperature: float,
         max_temperature: float,
+        interest: str,
+        preferences: str,
+        interest_coef: float,
     ) -> str | type[BasePolicy]:
         """Validate and store the 2D-RL arguments; returns the policy, a class made 2D (eq. 3-9) if needed."""
         check_positive_int("n_steps", n_steps)
@@ -82,6 +86,8 @@ class TwoDimOnPolicyMixin:
             check_non_negative("punishment_vf_coef", punishment_vf_coef)
         make_reward_split(reward_split)  # validates
         check_temperature(temperature, min_temperature, max_temperature)
+        check_interest_modes(interest, preferences)
+        check_non_negative("interest_coef", interest_coef)
         self.punishment_gamma = punishment_gamma
         self.punishment_gae_lambda = gae_lambda if punishment_gae_lambda is None else punishment_gae_lambda
         self.punishment_vf_coef = vf_coef if punishment_vf_coef is None else punishment_vf_coef
@@ -90,6 +96,9 @@ class TwoDimOnPolicyMixin:
         self.temperature = temperature
         self.min_temperature = min_temperature
         self.max_temperature = max_temperature
+        self.interest = interest
+        self.preferences = preferences
+        self.interest_coef = interest_coef
         self._carried_interest: tuple[Any, np.ndarray] | None = None
         return policy if isinstance(policy, str) else two_dim_policy_class(policy)
 
@@ -111,7 +120,11 @@ class TwoDimOnPolicyMixin:
             punishment_weight=self.punishment_weight,
         )
         super()._setup_model()  # type: ignore[misc]
-        self.policy.set_temperature(self.temperature, self.min_temperature, self.max_temperature)
+        if self.interest == "learned":
+            self.policy.add_interest_head()
+        self.policy.set_temperature(
+            self.temperature, self.min_temperature, self.max_temperature, self.interest, self.preferences
+        )
 
     def _excluded_save_params(self) -> list[str]:
         return [*super()._excluded_save_params(), "_carried_interest"]  # type: ignore[misc]
@@ -178,9 +191,12 @@ class TwoDimOnPolicyMixin:
         reward_split = make_reward_split(self.reward_split)
         with th.no_grad():
             obs_tensor = obs_as_tensor(self._last_obs, self.device)
-            latent_pi, values, punishment_values = self.policy.evaluate_state(obs_tensor)
+            latent_pi, values, punishment_values, predicted = self.policy.evaluate_state(obs_tensor)
         critics = flat(values), flat(punishment_values)
-        inverse_temperature = self.policy.inverse_temperature(self._interest_at_rollout_start())
+        learned = self.interest == "learned"  # the state's own predicted interest, not the transition's into it
+        inverse_temperature = self.policy.inverse_temperature(
+            flat(predicted) if learned else self._interest_at_rollout_start()
+        )
 
         while n_steps < n_rollout_steps:
             if self.use_sde and self.sde_sample_freq > 0 and n_steps % self.sde_sample_freq == 0:
@@ -214,12 +230,13 @@ class TwoDimOnPolicyMixin:
             with th.no_grad():
                 obs_tensor = obs_as_tensor(new_obs, self.device)  # type: ignore[arg-type]
                 if n_steps < n_rollout_steps:
-                    latent_pi, *next_values = self.policy.evaluate_state(obs_tensor)
+                    latent_pi, *next_values, predicted = self.policy.evaluate_state(obs_tensor)
                 else:  # only the critics are needed after the last step, to bootstrap the returns
                     next_values = self.policy.predict_critics(obs_tensor)
             next_critics = flat(next_values[0]), flat(next_values[1])
             rewards, punishments = split_rewards(reward_split, rewards, infos, self.num_timesteps)
             interest = self._interest(rewards, punishments, critics, next_critics, dones)
+            self.policy.update_interest_scale(interest, dones)
             # Bootstrap both critics on time-limit truncation, as SB3 does (GitHub issue #633)
             for idx, done in enumerate(dones):
                 if (
@@ -247,7 +264,8 @@ class TwoDimOnPolicyMixin:
             self._last_obs = new_obs
             self._last_episode_starts = dones
             (values, punishment_values), critics = next_values, next_critics
-            inverse_temperature = self.policy.inverse_temperature(interest)
+            if n_steps < n_rollout_steps:
+                inverse_temperature = self.policy.inverse_temperature(flat(predicted) if learned else interest)
 
         rollout_buffer.compute_returns_and_advantage(  # type: ignore[call-arg]
             last_values=values, dones=dones, last_punishment_values=punishment_values
@@ -259,9 +277,22 @@ class TwoDimOnPolicyMixin:
         callback.on_rollout_end()
         return True
 
-    def _log_two_dim(self, punishment_value_loss: float) -> None:
+    def interest_share(self, inverse_temperatures: np.ndarray) -> float:
+        """Share of actions whose temperature the interest set: strictly between the clamps, not uniform.
+
+        0 at a fixed ``temperature``.
+        """
+        if self.temperature != "interest":
+            return 0.0
+        low, high = np.float32(1.0 / self.max_temperature), np.float32(1.0 / self.min_temperature)
+        inside = (inverse_temperatures > low) & (inverse_temperatures < high)
+        return int(np.count_nonzero(inside)) / inverse_temperatures.size
+
+    def _log_two_dim(self, punishment_value_loss: float, interest_loss: float | None = None) -> None:
         """Log the 2D statistics of the last rollout beside the algorithm's own keys."""
         buffer = self.rollout_buffer
+        if interest_loss is not None:
+            self.logger.record("train/interest_loss", interest_loss)
         self.logger.record(
             "train/punishment_explained_variance",
             fast_explained_variance(buffer.punishment_values, buffer.punishment_returns),
@@ -272,4 +303,5 @@ class TwoDimOnPolicyMixin:
         tempered = buffer.inverse_temperatures[buffer.inverse_temperatures > 0]
         if tempered.size:
             self.logger.record("train/temperature", fast_mean(1.0 / tempered))
+        self.logger.record("train/interest_share", self.interest_share(buffer.inverse_temperatures))
         self.logger.record("rollout/punishment_mean", fast_mean(buffer.punishments))

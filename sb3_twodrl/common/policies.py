@@ -1,9 +1,10 @@
 """Actor-critic policies with a reward critic, a punishment critic and a tempered action distribution.
 
 The actor keeps SB3's action network: its outputs are the preferences ``p(s, a)`` of eq. 9-10.
-Actions are drawn from the softmax of ``p / T`` (eq. 9), ``T`` being the interest ``delta+``
-(eq. 2) clamped to ``[min_temperature, max_temperature]``. :class:`TwoDimPolicyMixin` adds the
-punishment head and the tempered distribution to any SB3 ``ActorCriticPolicy`` subclass
+Actions are drawn from the softmax of ``p / T`` (eq. 9), ``T`` set by the interest ``delta+``
+(eq. 2) in one of the modes of :mod:`sb3_twodrl.common.interest`, clamped to
+``[min_temperature, max_temperature]``. :class:`TwoDimPolicyMixin` adds the punishment head and the tempered
+distribution to any SB3 ``ActorCriticPolicy`` subclass
 (:func:`two_dim_policy_class`); the temperature settings are the algorithm's arguments, handed
 to the policy by :meth:`TwoDimPolicyMixin.set_temperature`.
 """
@@ -25,12 +26,15 @@ from stable_baselines3.common.torch_layers import CombinedExtractor, NatureCNN
 from stable_baselines3.common.type_aliases import PyTorchObs
 from torch import nn
 
+from sb3_twodrl.common.interest import bounded_preferences, check_interest_modes, relative_interest, updated_scale
 from sb3_twodrl.common.validation import is_real
 
 INTEREST_EMA_RATE = 0.1
-"""Weight of the newest rollout's mean interest in the running estimate used by ``predict``."""
+"""Weight of the newest rollout's mean interest in the ``"paper"`` mode's running estimate used by ``predict``."""
 
-DEFAULT_TEMPERATURE: dict[str, Any] = dict(temperature="interest", min_temperature=0.5, max_temperature=10.0)
+DEFAULT_TEMPERATURE: dict[str, Any] = dict(
+    temperature="interest", min_temperature=0.5, max_temperature=10.0, interest="relative", preferences="bounded"
+)
 """The algorithms' default temperature settings, which a policy has until the algorithm sets its own."""
 
 _GAUSSIANS = (DiagGaussianDistribution, StateDependentNoiseDistribution)
@@ -64,7 +68,11 @@ class TwoDimPolicyMixin:
 
     ``predict_values`` keeps SB3's meaning (``V_R``). ``evaluate_actions`` and ``forward`` use the
     raw preferences (``T = 1``); rollout collection and ``predict`` sample from the tempered
-    distribution (eq. 9), ``predict`` with the running interest estimate saved with the policy.
+    distribution (eq. 9), ``predict`` with the running interest estimate saved with the policy
+    (in the ``"learned"`` mode, with the interest head's estimate for the state).
+    :meth:`add_interest_head` (the algorithm calls it in the ``"learned"`` mode) adds a third linear
+    head ``I(s)`` on the critic network, fed a detached latent so that its loss does not flow into
+    the critics' layers, and initialised without touching the global RNG.
     It relies only on what every ``ActorCriticPolicy`` has: ``mlp_extractor`` (``forward_actor``,
     ``forward_critic``, ``latent_dim_vf``), ``action_net``, ``value_net`` and ``action_dist``.
     """
@@ -83,14 +91,38 @@ class TwoDimPolicyMixin:
 
     def __init__(self, *args: Any, **kwargs: Any):
         self.set_temperature(**DEFAULT_TEMPERATURE)
+        self.interest_net: nn.Module | None = None
         super().__init__(*args, **kwargs)
 
-    def set_temperature(self, temperature: str | float, min_temperature: float, max_temperature: float) -> None:
-        """Set how the interest becomes the temperature of eq. 9 (the algorithm's arguments)."""
+    def set_temperature(
+        self,
+        temperature: str | float,
+        min_temperature: float,
+        max_temperature: float,
+        interest: str = "relative",
+        preferences: str = "bounded",
+    ) -> None:
+        """Set how the interest becomes the temperature of eq. 9 (the algorithm's arguments;
+        ``interest`` and ``preferences``: :mod:`sb3_twodrl.common.interest`)."""
         check_temperature(temperature, min_temperature, max_temperature)
+        check_interest_modes(interest, preferences)
+        if interest == "learned" and getattr(self, "interest_net", None) is None:
+            raise ValueError('interest="learned" needs the interest head: call add_interest_head() first')
         self.temperature = temperature
         self.min_temperature = min_temperature
         self.max_temperature = max_temperature
+        self.interest = interest
+        self.preferences = preferences
+
+    def add_interest_head(self) -> None:
+        """Add the ``"learned"`` mode's head ``I(s)`` (estimate of ``E[delta+ | s]``) and give it to the optimizer."""
+        if self.interest_net is not None:
+            return
+        with th.random.fork_rng(devices=[]):
+            self.interest_net = nn.Linear(self.mlp_extractor.latent_dim_vf, 1).to(self.device)  # type: ignore[attr-defined]
+            if self.ortho_init:
+                self.interest_net.apply(partial(self.init_weights, gain=1))  # type: ignore[attr-defined]
+        self.optimizer.add_param_group({"params": list(self.interest_net.parameters())})  # type: ignore[attr-defined]
 
     def _build(self, lr_schedule: Any) -> None:
         super()._build(lr_schedule)  # type: ignore[misc]
@@ -105,8 +137,8 @@ class TwoDimPolicyMixin:
             **self.optimizer_kwargs,  # type: ignore[attr-defined]
         )
 
-    def evaluate_state(self, obs: PyTorchObs) -> tuple[th.Tensor, th.Tensor, th.Tensor]:
-        """Actor latent, ``V_R(s)`` and ``V_P(s)`` in one pass."""
+    def evaluate_state(self, obs: PyTorchObs) -> tuple[th.Tensor, th.Tensor, th.Tensor, th.Tensor | None]:
+        """Actor latent, ``V_R(s)``, ``V_P(s)`` and the interest head's ``I(s)`` (None without one) in one pass."""
         features = self.extract_features(obs)  # type: ignore[attr-defined]
         if self.share_features_extractor:
             latent_pi, latent_vf = self.mlp_extractor(features)
@@ -114,15 +146,19 @@ class TwoDimPolicyMixin:
             pi_features, vf_features = features
             latent_pi = self.mlp_extractor.forward_actor(pi_features)
             latent_vf = self.mlp_extractor.forward_critic(vf_features)
-        return latent_pi, self.value_net(latent_vf), self.punishment_value_net(latent_vf)
+        return latent_pi, self.value_net(latent_vf), self.punishment_value_net(latent_vf), self._predicted(latent_vf)
+
+    def _predicted(self, latent_vf: th.Tensor) -> th.Tensor | None:
+        return None if self.interest_net is None else self.interest_net(latent_vf.detach())
 
     def evaluate_actions_two_dim(
         self, obs: PyTorchObs, actions: th.Tensor
-    ) -> tuple[th.Tensor, th.Tensor, th.Tensor, th.Tensor | None]:
-        """``V_R``, ``V_P``, log-probability and entropy of ``actions`` under the raw preferences (eq. 10)."""
-        latent_pi, values, punishment_values = self.evaluate_state(obs)
+    ) -> tuple[th.Tensor, th.Tensor, th.Tensor | None, th.Tensor, th.Tensor | None]:
+        """``V_R``, ``V_P``, ``I(s)`` (None without a head), log-probability and entropy of ``actions``
+        under the raw preferences (eq. 10)."""
+        latent_pi, values, punishment_values, predicted = self.evaluate_state(obs)
         distribution = self._get_action_dist_from_latent(latent_pi)  # type: ignore[attr-defined]
-        return values, punishment_values, distribution.log_prob(actions), distribution.entropy()
+        return values, punishment_values, predicted, distribution.log_prob(actions), distribution.entropy()
 
     def predict_critics(self, obs: PyTorchObs) -> tuple[th.Tensor, th.Tensor]:
         """Reward critic ``V_R(s)`` and punishment critic ``V_P(s)`` (eq. 3, 4)."""
@@ -135,16 +171,21 @@ class TwoDimPolicyMixin:
         return self.predict_critics(obs)[1]
 
     def inverse_temperature(self, interest: np.ndarray) -> np.ndarray:
-        """``1 / T`` of eq. 9 for each interest value (float32).
+        """``1 / T`` of eq. 9 for each interest value (float32): ``delta+`` of the transition into the
+        state, or in the ``"learned"`` mode the head's ``I(s)``; divided by the running scale in the
+        ``"relative"`` and ``"learned"`` modes.
 
-        An interest of exactly 0 gives uniform random actions (``1/T = 0``), as the paper states;
-        a Gaussian (gSDE's included) has no uniform limit and takes ``max_temperature`` instead.
+        In the ``"paper"`` and ``"relative"`` modes an interest of exactly 0 gives uniform random
+        actions (``1/T = 0``), as the paper states; a Gaussian (gSDE's included) has no uniform
+        limit and takes ``max_temperature`` instead.
         """
         if self.temperature != "interest":
             return np.full(np.shape(interest), 1.0 / self.temperature, dtype=np.float32)
         interest = np.asarray(interest, dtype=np.float32)
+        if self.interest != "paper":
+            interest = relative_interest(np.maximum(interest, 0.0), self.running_interest.item())
         inverse = np.reciprocal(np.minimum(np.maximum(interest, self.min_temperature), self.max_temperature))
-        if not isinstance(self.action_dist, _GAUSSIANS):
+        if self.interest != "learned" and not isinstance(self.action_dist, _GAUSSIANS):
             inverse *= interest > 0
         return inverse
 
@@ -160,10 +201,19 @@ class TwoDimPolicyMixin:
             return self.action_dist.proba_distribution(mean_actions, self.log_std, latent_pi / inverse)
         if isinstance(self.action_dist, DiagGaussianDistribution):
             return self.action_dist.proba_distribution(mean_actions, self.log_std - th.log(inverse))
+        if self.preferences == "bounded":
+            mean_actions = bounded_preferences(mean_actions)
         return self.action_dist.proba_distribution(action_logits=mean_actions * inverse)  # type: ignore[call-arg]
 
+    def update_interest_scale(self, interest: np.ndarray, dones: np.ndarray) -> None:
+        """``"relative"``/``"learned"``: fold one vectorised step's interest into the running scale."""
+        if self.interest != "paper":
+            self.running_interest.fill_(updated_scale(self.running_interest.item(), interest, dones))
+
     def update_running_interest(self, mean_interest: float) -> None:
-        """Fold one rollout's mean interest into the estimate that ``predict`` uses."""
+        """``"paper"``: fold one rollout's mean interest into the estimate that ``predict`` uses."""
+        if self.interest != "paper":
+            return
         running = self.running_interest.item()
         self.running_interest.fill_(
             mean_interest if running == 0.0 else running + INTEREST_EMA_RATE * (mean_interest - running)
@@ -173,20 +223,25 @@ class TwoDimPolicyMixin:
         features = BaseModel.extract_features(self, obs, self.pi_features_extractor)  # type: ignore[arg-type]
         return self.mlp_extractor.forward_actor(features)
 
-    def _running_distribution(self, latent_pi: th.Tensor) -> Distribution:
-        interest = np.full(len(latent_pi), self.running_interest.item(), dtype=np.float32)
+    def _running_distribution(self, obs: PyTorchObs, latent_pi: th.Tensor) -> Distribution:
+        if self.interest_net is None or self.interest != "learned":
+            interest = np.full(len(latent_pi), self.running_interest.item(), dtype=np.float32)
+        else:
+            features = BaseModel.extract_features(self, obs, self.vf_features_extractor)  # type: ignore[arg-type]
+            predicted = self.interest_net(self.mlp_extractor.forward_critic(features))
+            interest = predicted.detach().cpu().numpy().ravel()
         return self.tempered_distribution(latent_pi, self.inverse_temperature(interest))
 
     def get_distribution(self, obs: PyTorchObs) -> Distribution:
-        """Tempered action distribution (eq. 9) at the running interest estimate."""
-        return self._running_distribution(self._actor_latent(obs))
+        """Tempered action distribution (eq. 9) at the running interest estimate (``"learned"``: at ``I(s)``)."""
+        return self._running_distribution(obs, self._actor_latent(obs))
 
     def _predict(self, observation: PyTorchObs, deterministic: bool = False) -> th.Tensor:
         """Sample at the running interest, or take the argmax of the raw preferences if ``deterministic``."""
         latent_pi = self._actor_latent(observation)
         if deterministic:
             return self._get_action_dist_from_latent(latent_pi).get_actions(deterministic=True)  # type: ignore[attr-defined]
-        return self._running_distribution(latent_pi).get_actions()
+        return self._running_distribution(observation, latent_pi).get_actions()
 
 
 class TwoDimActorCriticPolicy(TwoDimPolicyMixin, ActorCriticPolicy):

@@ -49,7 +49,10 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
     :param punishment_weight: ``w`` in the utility ``A_R - w * A_P`` (eq. 1 is ``w = 1``)
     :param reward_split: how ``(reward, info)`` becomes ``(r_R, r_P)``: ``"auto"``, ``"info"``,
         ``"cost"``, ``"sign"`` or a callable (see ``sb3_twodrl.common.splitting``)
-    :param temperature: ``"interest"`` (eq. 9 with ``T = delta+``) or a fixed positive temperature
+    :param temperature: ``"interest"`` (eq. 9, ``T`` set by the interest) or a fixed positive temperature
+    :param interest: how the interest sets ``T``: ``"relative"``, ``"paper"`` or ``"learned"`` (as ``TwoDimA2C``)
+    :param preferences: ``"bounded"`` or ``"raw"`` preferences (as ``TwoDimA2C``)
+    :param interest_coef: loss weight of the ``"learned"`` mode's interest head
     :param min_temperature: floor of the interest temperature
     :param max_temperature: ceiling of the interest temperature
     """
@@ -97,6 +100,9 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
         temperature: str | float = "interest",
         min_temperature: float = 0.5,
         max_temperature: float = 10.0,
+        interest: str = "relative",
+        preferences: str = "bounded",
+        interest_coef: float = 0.5,
         _init_setup_model: bool = True,
     ):
         policy = self._init_two_dim(
@@ -114,6 +120,9 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
             temperature=temperature,
             min_temperature=min_temperature,
             max_temperature=max_temperature,
+            interest=interest,
+            preferences=preferences,
+            interest_coef=interest_coef,
         )
         super().__init__(
             policy,
@@ -154,6 +163,7 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
             clip_range_vf = self.clip_range_vf(self._current_progress_remaining)  # type: ignore[operator]
 
         entropy_losses, pg_losses, value_losses, punishment_value_losses, clip_fractions = [], [], [], [], []
+        interest_losses: list[float] = []
         continue_training = True
         for epoch in range(self.n_epochs):
             approx_kl_divs = []
@@ -162,7 +172,7 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
                 if isinstance(self.action_space, spaces.Discrete):
                     actions = rollout_data.actions.long().flatten()
 
-                values, punishment_values, log_prob, entropy = self.policy.evaluate_actions_two_dim(
+                values, punishment_values, predicted, log_prob, entropy = self.policy.evaluate_actions_two_dim(
                     rollout_data.observations, actions
                 )
                 advantages = rollout_data.advantages
@@ -194,6 +204,10 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
                     + self.vf_coef * value_loss
                     + self.punishment_vf_coef * punishment_value_loss
                 )
+                if predicted is not None:  # the head learns E[delta+ | s] (sb3_twodrl.common.interest, "learned")
+                    interest_loss = F.mse_loss(rollout_data.interests, predicted.flatten())
+                    interest_losses.append(interest_loss.item())
+                    loss = loss + self.interest_coef * interest_loss
 
                 # Approximate reverse KL for early stopping (SB3 GitHub issue #417)
                 with th.no_grad():
@@ -232,7 +246,9 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
         self.logger.record("train/clip_range", clip_range)
         if clip_range_vf is not None:
             self.logger.record("train/clip_range_vf", clip_range_vf)
-        self._log_two_dim(float(np.mean(punishment_value_losses)))
+        self._log_two_dim(
+            float(np.mean(punishment_value_losses)), float(np.mean(interest_losses)) if interest_losses else None
+        )
 
     def learn(
         self: SelfTwoDimPPO,

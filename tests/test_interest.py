@@ -1,0 +1,146 @@
+"""The interest modes of ``sb3_twodrl.interest``: what each one's temperature means (eq. 2, 9)."""
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import torch as th
+from gymnasium.wrappers import TimeLimit
+from stable_baselines3.common.env_util import make_vec_env
+
+from sb3_twodrl import TwoDimA2C
+from sb3_twodrl.common.interest import INTEREST_MODES
+from tests.toy_envs import LatticeCorridor
+
+WEST = 3  # LatticeCorridor's move into the wall at the start
+
+
+class ScaledFeedback(gym.Wrapper):
+    """Multiplies the reward and ``info["punishment"]`` (so ``r_R`` and ``r_P``) by ``factor``."""
+
+    def __init__(self, env: gym.Env, factor: float):
+        super().__init__(env)
+        self.factor = factor
+
+    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict]:
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        info = {**info, "punishment": self.factor * info["punishment"]}
+        return obs, self.factor * reward, terminated, truncated, info
+
+
+def rollout_temperatures(interest: str, factor: float) -> np.ndarray:
+    """Inverse temperatures of one seeded rollout with rewards and critics' outputs scaled by ``factor``."""
+    env = make_vec_env(lambda: ScaledFeedback(TimeLimit(LatticeCorridor(5, 3), 40), factor), n_envs=2, seed=0)
+    model = TwoDimA2C("MlpPolicy", env, n_steps=64, gamma=0.9, interest=interest, seed=0)
+    with th.no_grad():  # critics whose every output is `factor` times as large: every TD error scales
+        for head in (model.policy.value_net, model.policy.punishment_value_net):
+            head.weight.mul_(factor)
+            head.bias.mul_(factor)
+    model.learn(128)
+    return model.rollout_buffer.inverse_temperatures.copy()
+
+
+def test_relative_interest_does_not_depend_on_the_reward_scale() -> None:
+    base, scaled = rollout_temperatures("relative", 1.0), rollout_temperatures("relative", 10.0)
+    tempered = base[base > 0]
+    assert np.unique(tempered).size > 10  # the interest, not a clamp, set most temperatures
+    np.testing.assert_allclose(scaled, base, rtol=1e-4)
+
+
+def test_paper_interest_depends_on_the_reward_scale() -> None:
+    """The property above is not vacuous: eq. 9 taken literally runs ten times hotter."""
+    base, scaled = rollout_temperatures("paper", 1.0), rollout_temperatures("paper", 10.0)
+    assert not np.allclose(scaled, base, rtol=1e-2)
+
+
+def test_learned_interest_head_predicts_delta_plus() -> None:
+    """The head's target is the interest of the transition out of each state: repeated updates on
+    one rollout bring its predictions close to that rollout's ``delta+``."""
+    env = make_vec_env(lambda: TimeLimit(LatticeCorridor(5, 3), 40), n_envs=4, seed=0)
+    model = TwoDimA2C("MlpPolicy", env, n_steps=32, gamma=0.9, interest="learned", learning_rate=3e-3, seed=0)
+    model.learn(128)
+    buffer = model.rollout_buffer
+    observations = th.as_tensor(buffer.observations.reshape(-1, *model.observation_space.shape))
+    targets = buffer.interests.reshape(-1)  # flattened in the buffer's sample order
+
+    def error() -> float:
+        with th.no_grad():
+            _, _, _, predicted = model.policy.evaluate_state(observations)
+        return float(np.mean((predicted.numpy().ravel() - targets) ** 2))
+
+    baseline = float(np.var(targets))
+    before = error()
+    for _ in range(300):
+        model.train()
+    assert error() < 0.5 * min(before, baseline)
+
+
+def test_learned_interest_head_is_saved_and_loaded(tmp_path: Any) -> None:
+    env = make_vec_env(lambda: TimeLimit(LatticeCorridor(5, 3), 40), n_envs=2, seed=0)
+    model = TwoDimA2C("MlpPolicy", env, n_steps=16, interest="learned", seed=0).learn(320)
+    model.save(tmp_path / "model")
+    loaded = TwoDimA2C.load(tmp_path / "model")
+    assert loaded.policy.interest == "learned"
+    for name, tensor in model.policy.state_dict().items():
+        assert th.equal(loaded.policy.state_dict()[name], tensor), name
+    obs = np.eye(15, dtype=np.float32)
+    with th.no_grad():
+        expected = model.policy.get_distribution(th.as_tensor(obs)).distribution.probs
+        actual = loaded.policy.get_distribution(th.as_tensor(obs)).distribution.probs
+    th.testing.assert_close(actual, expected)
+    assert model.policy.running_interest.item() > 0
+    assert loaded.policy.running_interest.item() == model.policy.running_interest.item()
+
+
+def test_only_the_learned_mode_has_an_interest_head() -> None:
+    for mode in INTEREST_MODES:
+        policy = TwoDimA2C("MlpPolicy", LatticeCorridor(), interest=mode).policy
+        assert (policy.interest_net is not None) == (mode == "learned")
+
+
+def collapsed_model(**kwargs: Any) -> TwoDimA2C:
+    """A model whose actor has collapsed onto driving into the wall (raw preference 30 for west)."""
+    env = make_vec_env(lambda: TimeLimit(LatticeCorridor(6, 3), 60), n_envs=4, seed=0)
+    model = TwoDimA2C("MlpPolicy", env, gamma=0.9, seed=0, **kwargs)
+    with th.no_grad():
+        model.policy.action_net.bias.copy_(th.tensor([0.0, 0.0, 0.0, 30.0]))
+    return model
+
+
+@pytest.mark.parametrize("interest", [1e-9, 1e-3, 1.0, 1e3])
+def test_default_keeps_every_action_possible_whatever_the_interest(interest: float) -> None:
+    """No freeze: however large the preferences grow and however calm the critics, every action
+    keeps a probability of at least half a percent (raw eq. 9 gives the others ~exp(-60)); the
+    preferred one stays the most probable."""
+    model = collapsed_model()
+    policy = model.policy
+    policy.running_interest.fill_(1.0)
+    obs = th.as_tensor(np.eye(18, dtype=np.float32))
+    inverse = policy.inverse_temperature(np.full(len(obs), interest, dtype=np.float32))
+    with th.no_grad():
+        probs = policy.tempered_distribution(policy._actor_latent(obs), inverse).distribution.probs
+    assert (probs.argmax(dim=1) == WEST).all() and probs.min() > 0.005
+
+
+def test_paper_mode_freezes_on_a_collapsed_policy() -> None:
+    """The property above is not vacuous: eq. 9 taken literally leaves the alternatives ~exp(-60)."""
+    policy = collapsed_model(interest="paper", preferences="raw").policy
+    obs = th.as_tensor(np.eye(18, dtype=np.float32))
+    inverse = policy.inverse_temperature(np.full(len(obs), 1e-3, dtype=np.float32))
+    with th.no_grad():
+        probs = policy.tempered_distribution(policy._actor_latent(obs), inverse).distribution.probs
+    assert probs.min() < 1e-6
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        (dict(interest="surprise"), "interest must be one of"),
+        (dict(preferences="softmax"), "preferences must be one of"),
+        (dict(interest_coef=-1.0), "interest_coef must be finite and >= 0"),
+    ],
+)
+def test_bad_interest_settings_are_rejected(kwargs: dict[str, Any], match: str) -> None:
+    with pytest.raises(ValueError, match=match):
+        TwoDimA2C("MlpPolicy", LatticeCorridor(), **kwargs)
