@@ -3,8 +3,8 @@
     python scripts/ablation.py --out ablation                        # 10 seeds, 10 epochs of 20k steps
     python scripts/ablation.py --out ablation --seeds 0 1 --epochs 2  # a quick look
 
-Arms (every setting that is not 2D-RL's is the same in all of them: batched ``NomadOffice-v0``
-with 16 robots, ``n_steps=5``, gamma 0.9, ``gae_lambda=1``, learning rate 7e-4, RMSprop, no
+Arms (every setting that is not 2D-RL's is the same in all of them: batched ``NomadOffice-v0`` (``--map``: ``office``,
+the default, or ``open``) with 16 robots, ``n_steps=5``, gamma 0.9, ``gae_lambda=1``, learning rate 7e-4, RMSprop, no
 entropy bonus, SB3's ``MlpPolicy`` network):
 
 1. ``a2c``: SB3's A2C.
@@ -13,8 +13,8 @@ entropy bonus, SB3's ``MlpPolicy`` network):
    the mean temperature of the ``paper`` arm in the same run of this script; raw preferences.
 3. ``twod_fixed``: TwoDimA2C (two critics, the utility) at that fixed temperature: no interest, raw preferences.
 4. ``paper``: TwoDimA2C with ``interest="paper", preferences="raw"``: eq. 9 as the paper writes it.
-5. ``default``: TwoDimA2C with its defaults (``interest="relative", preferences="bounded"``).
-6. ``relative_raw``: the default's interest with raw preferences (which of the two changes does what).
+5. ``relative_bounded``: TwoDimA2C with ``interest="relative", preferences="bounded"`` (the no-freeze option).
+6. ``relative_raw``: the relative interest with raw preferences (which of the two changes does what).
 
 Protocol, fixed before any run: an epoch is ``--epoch-steps`` learning steps, then one test
 episode on each of ``--test-robots`` robots of a separately seeded batched office with the
@@ -46,7 +46,7 @@ from envs.nomad.batched import make_sb3_vec_env
 from sb3_twodrl import TwoDimA2C
 from sb3_twodrl.callbacks import EpisodeTracker, summarize_episodes
 
-ARMS = ("a2c", "a2c_fixed", "twod_fixed", "paper", "default", "relative_raw")
+ARMS = ("a2c", "a2c_fixed", "twod_fixed", "paper", "relative_bounded", "relative_raw")
 SHARED = dict(n_steps=5, gamma=0.9, gae_lambda=1.0, learning_rate=7e-4, ent_coef=0.0, device="cpu")
 TWO_DIM = dict(punishment_gamma=0.1, reward_split="info")
 METRICS = (
@@ -65,8 +65,8 @@ def whole_reward(reward: float, info: dict[str, Any]) -> tuple[float, float]:
     return reward, 0.0
 
 
-def make_model(arm: str, seed: int, temperature: float | None) -> A2C:
-    env = make_sb3_vec_env(16, seed=seed)
+def make_model(arm: str, seed: int, temperature: float | None, map_name: str = "office") -> A2C:
+    env = make_sb3_vec_env(16, seed=seed, map=map_name)
     if arm == "a2c":
         return A2C("MlpPolicy", env, seed=seed, **SHARED)
     if arm == "a2c_fixed":
@@ -76,13 +76,19 @@ def make_model(arm: str, seed: int, temperature: float | None) -> A2C:
         )
     if arm == "twod_fixed":
         return TwoDimA2C("MlpPolicy", env, temperature=temperature, preferences="raw", seed=seed, **TWO_DIM, **SHARED)
-    modes = {"paper": dict(interest="paper", preferences="raw"), "relative_raw": dict(preferences="raw")}.get(arm, {})
+    modes = {
+        "paper": dict(interest="paper", preferences="raw"),
+        "relative_bounded": dict(interest="relative", preferences="bounded"),
+        "relative_raw": dict(interest="relative", preferences="raw"),
+    }[arm]
     return TwoDimA2C("MlpPolicy", env, seed=seed, **modes, **TWO_DIM, **SHARED)
 
 
-def run_test_episodes(model: A2C, robots: int, seed: int, deterministic: bool = False) -> dict[str, float]:
+def run_test_episodes(
+    model: A2C, robots: int, seed: int, deterministic: bool = False, map_name: str = "office"
+) -> dict[str, float]:
     """One test episode per robot of a batched office seeded with ``seed``; the stochastic policy unless told."""
-    env = make_sb3_vec_env(robots, seed=seed)
+    env = make_sb3_vec_env(robots, seed=seed, map=map_name)
     with th.random.fork_rng(devices=[]):
         th.manual_seed(seed)
         obs, tracker, records = env.reset(), EpisodeTracker(robots), [None] * robots
@@ -98,16 +104,17 @@ def run_test_episodes(model: A2C, robots: int, seed: int, deterministic: bool = 
 class Epochs(BaseCallback):
     """Test episodes after every ``epoch_steps`` learning steps; the interest's share and mean temperature."""
 
-    def __init__(self, epoch_steps: int, robots: int, seed: int):
+    def __init__(self, epoch_steps: int, robots: int, seed: int, map_name: str = "office"):
         super().__init__()
-        self.epoch_steps, self.robots, self.seed = epoch_steps, robots, seed
+        self.epoch_steps, self.robots, self.seed, self.map_name = epoch_steps, robots, seed, map_name
         self.epochs: list[dict[str, float]] = []
         self.inside = self.steps = 0
         self.temperature_sum, self.tempered = 0.0, 0
 
     def _on_step(self) -> bool:
         if self.num_timesteps >= (len(self.epochs) + 1) * self.epoch_steps:
-            self.epochs.append(run_test_episodes(self.model, self.robots, 10**6 + 1_000 * self.seed + len(self.epochs)))
+            seed = 10**6 + 1_000 * self.seed + len(self.epochs)
+            self.epochs.append(run_test_episodes(self.model, self.robots, seed, map_name=self.map_name))
         return True
 
     def _on_rollout_end(self) -> None:
@@ -120,14 +127,22 @@ class Epochs(BaseCallback):
         self.tempered += int(np.count_nonzero(inverse > 0))
 
 
-def run(arm: str, seed: int, epochs: int, epoch_steps: int, robots: int, temperature: float | None) -> dict[str, Any]:
+def run(
+    arm: str,
+    seed: int,
+    epochs: int,
+    epoch_steps: int,
+    robots: int,
+    temperature: float | None,
+    map_name: str = "office",
+) -> dict[str, Any]:
     th.set_num_threads(1)
-    model = make_model(arm, seed, temperature)
-    callback = Epochs(epoch_steps, robots, seed)
+    model = make_model(arm, seed, temperature, map_name)
+    callback = Epochs(epoch_steps, robots, seed, map_name)
     model.learn(epochs * epoch_steps, callback=callback)
     goal_rates = [epoch["goal_rate"] for epoch in callback.epochs]
     last = callback.epochs[-1]
-    greedy = run_test_episodes(model, robots, 10**6 + 1_000 * seed + epochs, deterministic=True)
+    greedy = run_test_episodes(model, robots, 10**6 + 1_000 * seed + epochs, deterministic=True, map_name=map_name)
     half = next((i + 1 for i, rate in enumerate(goal_rates) if rate >= 0.5), math.nan)
     peak = next((i for i, rate in enumerate(goal_rates) if rate >= 0.8), None)
     below = [rate < 0.5 for rate in goal_rates[peak:]] if peak is not None else []
@@ -218,6 +233,7 @@ def main() -> None:
     parser.add_argument("--epochs", type=int, default=10)
     parser.add_argument("--epoch-steps", type=int, default=20_000)
     parser.add_argument("--test-robots", type=int, default=32)
+    parser.add_argument("--map", default="office", help="office (the default office) or open (the issue-4 office)")
     parser.add_argument("--fixed-temperature", type=float, default=None, help="default: the paper arm's mean T")
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
@@ -234,7 +250,7 @@ def main() -> None:
         for seed in args.seeds:
             if any(r["arm"] == arm and r["seed"] == seed for r in runs):
                 continue
-            result = run(arm, seed, args.epochs, args.epoch_steps, args.test_robots, temperature)
+            result = run(arm, seed, args.epochs, args.epoch_steps, args.test_robots, temperature, args.map)
             runs.append(result)
             with log.open("a") as f:
                 f.write(json.dumps(result) + "\n")

@@ -30,7 +30,7 @@ def test_arms_share_every_non_2d_setting(arm: str) -> None:
 
 
 def test_a_run_reports_every_metric() -> None:
-    result = ablation.run("default", seed=0, epochs=2, epoch_steps=320, robots=4, temperature=None)
+    result = ablation.run("relative_bounded", seed=0, epochs=2, epoch_steps=320, robots=4, temperature=None)
     assert len(result["goal_rates"]) == 2
     for key in ablation.METRICS:
         assert key in result

@@ -109,11 +109,11 @@ def collapsed_model(**kwargs: Any) -> TwoDimA2C:
 
 
 @pytest.mark.parametrize("interest", [1e-9, 1e-3, 1.0, 1e3])
-def test_default_keeps_every_action_possible_whatever_the_interest(interest: float) -> None:
+def test_bounded_relative_keeps_every_action_possible_whatever_the_interest(interest: float) -> None:
     """No freeze: however large the preferences grow and however calm the critics, every action
     keeps a probability of at least half a percent (raw eq. 9 gives the others ~exp(-60)); the
     preferred one stays the most probable."""
-    model = collapsed_model()
+    model = collapsed_model(interest="relative", preferences="bounded")
     policy = model.policy
     policy.running_interest.fill_(1.0)
     obs = th.as_tensor(np.eye(18, dtype=np.float32))

@@ -93,8 +93,8 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
         temperature: str | float = "interest",
         min_temperature: float = 0.5,
         max_temperature: float = 10.0,
-        interest: str = "relative",
-        preferences: str = "bounded",
+        interest: str = "paper",
+        preferences: str = "raw",
         interest_coef: float = 0.5,
         _init_setup_model: bool = True,
     ):

@@ -33,7 +33,7 @@ INTEREST_EMA_RATE = 0.1
 """Weight of the newest rollout's mean interest in the ``"paper"`` mode's running estimate used by ``predict``."""
 
 DEFAULT_TEMPERATURE: dict[str, Any] = dict(
-    temperature="interest", min_temperature=0.5, max_temperature=10.0, interest="relative", preferences="bounded"
+    temperature="interest", min_temperature=0.5, max_temperature=10.0, interest="paper", preferences="raw"
 )
 """The algorithms' default temperature settings, which a policy has until the algorithm sets its own."""
 
@@ -99,8 +99,8 @@ class TwoDimPolicyMixin:
         temperature: str | float,
         min_temperature: float,
         max_temperature: float,
-        interest: str = "relative",
-        preferences: str = "bounded",
+        interest: str = "paper",
+        preferences: str = "raw",
     ) -> None:
         """Set how the interest becomes the temperature of eq. 9 (the algorithm's arguments;
         ``interest`` and ``preferences``: :mod:`sb3_twodrl.common.interest`)."""

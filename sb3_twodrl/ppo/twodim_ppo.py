@@ -50,8 +50,8 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
     :param reward_split: how ``(reward, info)`` becomes ``(r_R, r_P)``: ``"auto"``, ``"info"``,
         ``"cost"``, ``"sign"`` or a callable (see ``sb3_twodrl.common.splitting``)
     :param temperature: ``"interest"`` (eq. 9, ``T`` set by the interest) or a fixed positive temperature
-    :param interest: how the interest sets ``T``: ``"relative"``, ``"paper"`` or ``"learned"`` (as ``TwoDimA2C``)
-    :param preferences: ``"bounded"`` or ``"raw"`` preferences (as ``TwoDimA2C``)
+    :param interest: how the interest sets ``T``: ``"paper"``, ``"relative"`` or ``"learned"`` (as ``TwoDimA2C``)
+    :param preferences: ``"raw"`` or ``"bounded"`` preferences (as ``TwoDimA2C``)
     :param interest_coef: loss weight of the ``"learned"`` mode's interest head
     :param min_temperature: floor of the interest temperature
     :param max_temperature: ceiling of the interest temperature
@@ -100,8 +100,8 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
         temperature: str | float = "interest",
         min_temperature: float = 0.5,
         max_temperature: float = 10.0,
-        interest: str = "relative",
-        preferences: str = "bounded",
+        interest: str = "paper",
+        preferences: str = "raw",
         interest_coef: float = 0.5,
         _init_setup_model: bool = True,
     ):
