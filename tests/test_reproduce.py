@@ -88,7 +88,11 @@ def test_resume_accepts_an_added_algo(tmp_path):
 def test_ray_backend_gives_the_process_rows(process_run, tmp_path):
     pytest.importorskip("ray")
     # Ray >= 2.x dropped local_mode; a local single-node Ray instance (one CPU) runs the same tasks instead.
-    reproduce.reproduce([*COMMON, "--out", str(tmp_path), "--backend", "ray", "--workers", "1", "--no-plots"])
+    # One (algo, seed) pair keeps the test short; the runs are independent, so this is the backend's whole job.
+    base = ["--env", ENV, "--gym-packages", "tests.toy_nav", "--preset", "tiny", "--n-envs", "2", "--no-progress"]
+    one = [*base, "--algos", "twoda2c", "--seed-list", SEEDS[-1], "--out", str(tmp_path), "--no-plots"]
+    reproduce.reproduce([*one, "--backend", "ray", "--workers", "1"])
     ray_rows = without_wall(pd.read_csv(tmp_path / "results.csv"))
     process_rows = without_wall(pd.read_csv(process_run / "results.csv"))
-    pd.testing.assert_frame_equal(ray_rows, process_rows)
+    process_rows = process_rows[(process_rows["algo"] == "twoda2c") & (process_rows["seed"] == int(SEEDS[-1]))]
+    pd.testing.assert_frame_equal(ray_rows, process_rows.reset_index(drop=True))
