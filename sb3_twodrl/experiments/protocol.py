@@ -15,7 +15,7 @@ COLUMNS = ["env", "algo", "seed", "epoch", "learn_episodes", *METRICS, "env_step
 PRESETS: dict[str, dict[str, int]] = {
     # epochs, learning trials per epoch (K), test trials per epoch (M), seeds (S)
     "tiny": {"epochs": 3, "learn_episodes": 8, "test_episodes": 4, "seeds": 2},
-    "quick": {"epochs": 20, "learn_episodes": 1000, "test_episodes": 100, "seeds": 3},
+    "quick": {"epochs": 30, "learn_episodes": 1000, "test_episodes": 100, "seeds": 5},
     "paper": {"epochs": 1000, "learn_episodes": 1000, "test_episodes": 100, "seeds": 5},
 }
 _ZOO_ONLY = ("n_timesteps", "callback", "normalize", "env_wrapper", "vec_env_wrapper", "frame_stack")
