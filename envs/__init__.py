@@ -4,11 +4,14 @@ Importing this package registers:
 
 * ``NomadOffice-v0``: the office of paper section 3 with ideal sensors and exact 10 cm moves;
 * ``NomadOfficeReal-v0``: the same office on a stand-in for the physical robot (``envs.nomad.realistic``:
-  specular sonar, ringing, cross-talk, surface-dependent infrared, drifting odometry; its batched
-  env is its ``vector_entry_point``: ``gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point")``);
+  specular sonar, ringing, cross-talk, surface-dependent infrared, drifting odometry);
 * ``NomadOfficeMemorable-v0``: the same task replayed from a recorded sensor database (MEMORABLE);
 * ``NomadOfficeOpen-v0`` / ``NomadOfficeRealOpen-v0`` / ``NomadOfficeMemorableOpen-v0``: the three on the issue-4 office
   (``map="open"``, which any of the IDs also takes), kept so results can be shown on both maps.
+
+Every ID has a ``vector_entry_point``, its batched env
+(``gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point")``): sub-env ``i`` behaves
+exactly like ``gym.make(id)`` (tested).
 
 All are truncated after 300 steps: the shortest the wall-avoiding random walks of property P5
 (docs/nomad.md) need to reach the default office's goal by the detour in at least a quarter of their
@@ -19,7 +22,12 @@ from gymnasium import register
 
 MAX_EPISODE_STEPS = 300
 
-register(id="NomadOffice-v0", entry_point="envs.nomad.office:NomadOfficeEnv", max_episode_steps=MAX_EPISODE_STEPS)
+register(
+    id="NomadOffice-v0",
+    entry_point="envs.nomad.office:NomadOfficeEnv",
+    vector_entry_point="envs.nomad.batched:BatchedNomadOffice",
+    max_episode_steps=MAX_EPISODE_STEPS,
+)
 register(
     id="NomadOfficeReal-v0",
     entry_point="envs.nomad.realistic:NomadOfficeRealEnv",
@@ -29,11 +37,13 @@ register(
 register(
     id="NomadOfficeMemorable-v0",
     entry_point="envs.memorable.env:NomadOfficeMemorableEnv",
+    vector_entry_point="envs.memorable.env:BatchedNomadOfficeMemorable",
     max_episode_steps=MAX_EPISODE_STEPS,
 )
 register(
     id="NomadOfficeOpen-v0",
     entry_point="envs.nomad.office:NomadOfficeEnv",
+    vector_entry_point="envs.nomad.batched:BatchedNomadOffice",
     max_episode_steps=MAX_EPISODE_STEPS,
     kwargs={"map": "open"},
 )
@@ -47,6 +57,7 @@ register(
 register(
     id="NomadOfficeMemorableOpen-v0",
     entry_point="envs.memorable.env:NomadOfficeMemorableEnv",
+    vector_entry_point="envs.memorable.env:BatchedNomadOfficeMemorable",
     max_episode_steps=MAX_EPISODE_STEPS,
     kwargs={"map": "open"},
 )

@@ -18,7 +18,7 @@ from envs import MAX_EPISODE_STEPS
 from envs.memorable.database import SensorDatabase, load_database
 from envs.nomad import sensors
 from envs.nomad.batched import BatchedNomadOffice, SB3VecEnvAdapter, make_sb3_vec_env
-from envs.nomad.office import NomadOfficeEnv, OfficeCore
+from envs.nomad.office import NomadOfficeEnv, OfficeCore, counter_word
 
 
 class _Replay:
@@ -64,9 +64,12 @@ class NomadOfficeMemorableEnv(NomadOfficeEnv):
         super().__init__(map, observe_odometry=observe_odometry, render_mode=render_mode)
         self.replay = _Replay(self.core, database)
         self._moves = self.replay.moves
+        self._offsets, self._counts = self.replay.offsets.tolist(), self.replay.database.counts.tolist()
 
     def _lattice_readings(self, cell: int) -> np.ndarray:
-        return self.replay.draw(np.array([cell]), self._key, self._step)[0]
+        """:meth:`_Replay.draw` of one cell, in Python integers (a single env's step is mostly call overhead)."""
+        word = counter_word(int(self._key[0]), int(self._step[0]))
+        return self.replay.readings[self._offsets[cell] + word % self._counts[cell]]
 
     def _check_position(self, position: object) -> np.ndarray:
         xy = super()._check_position(position)

@@ -91,6 +91,28 @@ def episode_keys(base: np.ndarray, episode: np.ndarray) -> np.ndarray:
     ].copy()
 
 
+_MASK64 = (1 << 64) - 1
+
+
+def counter_word(key: int, step: int) -> int:
+    """Word 0 of :func:`envs.nomad.sensors.counter_hash` of one ``(key, step)``, in Python integers.
+
+    A single env needs one word per reset or replayed reading; numpy's call overhead would cost more
+    than the hash.
+    """
+    x = (key + (step * 64 + 1) * int(_GOLDEN)) & _MASK64
+    x ^= x >> 30
+    x = (x * 0xBF58476D1CE4E5B9) & _MASK64
+    x ^= x >> 27
+    x = (x * 0x94D049BB133111EB) & _MASK64
+    return x ^ (x >> 31)
+
+
+def episode_key(base: int, episode: int) -> int:
+    """:func:`episode_keys` of one env, in Python integers."""
+    return counter_word((base + episode * int(_GOLDEN)) & _MASK64, 0)
+
+
 def _sensor_noise(value: object) -> NoiseModel | None:
     if value is None or value is False:
         return None
@@ -157,6 +179,7 @@ class NomadOfficeEnv(gym.Env):
         self.observe_odometry = observe_odometry
         self.render_mode = render_mode
         self._moves = self.core.lattice.moves
+        self._cell_odometry = self.core.odometry(self.core.lattice.cells)  # on the lattice, odometry is the cell's
         dim = sensors.N_READINGS + (2 if observe_odometry else 0)
         self.observation_space = spaces.Box(0.0, 1.0, shape=(dim,), dtype=np.float32)
         self.action_space = spaces.Discrete(4)
@@ -168,6 +191,7 @@ class NomadOfficeEnv(gym.Env):
         self._pos = np.array(self.core.office.start, dtype=np.float64)
         self._odo = self._pos.copy()
         self._route = 0
+        self._start: tuple[np.ndarray, int, int] | None = None
         self._trajectory: list[tuple[float, float]] = []
         self._renderer = None
 
@@ -189,7 +213,8 @@ class NomadOfficeEnv(gym.Env):
         readings = self._lattice_readings(self._cell) if self._cell >= 0 else self._pose_readings(self._pos)
         if not self.observe_odometry:
             return readings.copy()
-        return np.concatenate([readings, self.core.odometry(self._odo)])
+        odometry = self._cell_odometry[self._cell] if self._cell >= 0 else self.core.odometry(self._odo)
+        return np.concatenate([readings, odometry])
 
     # --- gymnasium API --------------------------------------------------------------------
     def reset(
@@ -201,18 +226,26 @@ class NomadOfficeEnv(gym.Env):
             self._base_key = self.np_random.integers(0, 2**63, size=1, dtype=np.uint64)
             self._episode = -1
         self._episode += 1
-        self._key = episode_keys(self._base_key, np.array([self._episode]))
+        self._key[0] = episode_key(int(self._base_key[0]), self._episode)
         self._step[0] = 0
         options = {} if options is None else options
         if not isinstance(options, dict) or set(options) - {"position"}:
             raise ValueError(f"options may only contain 'position', got {options!r}")
-        position = options.get("position", self.core.office.start)
-        self._pos = self._check_position(position)
-        self._odo = self._pos.copy()
-        self._cell = self.core.lattice.index(self._pos) if self._on_lattice_motion else -1
-        self._route = int(route_code_at(self.core.office, self._pos))
+        if "position" in options:
+            self._pos, self._cell, self._route = self._start_state(options["position"])
+        else:  # the map's start, checked once per env
+            if self._start is None:
+                self._start = self._start_state(self.core.office.start)
+            self._pos, self._cell, self._route = self._start[0].copy(), *self._start[1:]
+        self._odo = self._pos.copy() if self._cell < 0 else self.core.lattice.cells[self._cell]
         self._trajectory = [tuple(self._pos)]
         return self._observation(), self._info(False, 0.0)
+
+    def _start_state(self, position: object) -> tuple[np.ndarray, int, int]:
+        """Checked position, lattice cell (-1 off the lattice or with noisy motion) and route code of a start."""
+        pos = self._check_position(position)
+        cell = self.core.lattice.index(pos) if self._on_lattice_motion else -1
+        return pos, cell, int(route_code_at(self.core.office, pos))
 
     @property
     def _on_lattice_motion(self) -> bool:

@@ -1,0 +1,143 @@
+"""Figures 3-5 of the 2D-RL paper and a results table from the experiment runner's tidy CSV (extra ``plots``).
+
+``python scripts/plots.py runs/reproduce/NomadOfficeMemorable-v0/results.csv`` redraws them.
+Curves: mean over seeds per epoch, band: 95% confidence interval of that mean (Student t over
+seeds; a seed whose share is undefined at an epoch, because none of its test episodes committed
+to a route, is left out of that epoch's share).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+STYLE = {  # the paper: proposed method solid, conventional actor-critic dotted
+    "twoda2c": {"label": "2D-RL (TwoDimA2C)", "linestyle": "-", "color": "tab:red"},
+    "a2c": {"label": "actor-critic (A2C)", "linestyle": ":", "color": "tab:blue"},
+    "ppo": {"label": "PPO", "linestyle": "-.", "color": "tab:green"},
+}
+FIGURES = [
+    ("fig3_goal_rate.png", "goal_rate", "goal reaching probability (test)", (0.0, 1.0)),
+    ("fig4_reward_per_step.png", "reward_per_step", "reward per step (test)", None),
+    ("fig5_route_share.png", "shortcut_share", "shortcut share of routed test episodes", (0.0, 1.0)),
+]
+
+
+def t_quantile(n: int) -> float:
+    """Two-sided 95% Student t quantile with n - 1 degrees of freedom."""
+    if n < 2:
+        return math.nan
+    return float(stats.t.ppf(0.975, n - 1))
+
+
+def mean_ci(values) -> tuple[float, float, int]:
+    """Mean and the half-width of its 95% interval over the finite values."""
+    v = np.asarray([x for x in values if np.isfinite(x)], dtype=float)
+    if v.size == 0:
+        return math.nan, math.nan, 0
+    if v.size == 1:
+        return float(v[0]), math.nan, 1
+    return float(v.mean()), float(t_quantile(v.size) * v.std(ddof=1) / math.sqrt(v.size)), int(v.size)
+
+
+def curves(df: pd.DataFrame, metric: str) -> dict[str, pd.DataFrame]:
+    out = {}
+    for algo, g in df.groupby("algo"):
+        rows = []
+        for epoch, e in g.groupby("epoch"):
+            mean, half, n = mean_ci(e[metric].to_numpy())
+            rows.append({"epoch": epoch, "mean": mean, "half": half, "n": n})
+        out[str(algo)] = pd.DataFrame(rows).sort_values("epoch")
+    return out
+
+
+def make_figures(df: pd.DataFrame, out_dir: str | Path, title: str = "") -> list[Path]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for filename, metric, ylabel, ylim in FIGURES:
+        fig, ax = plt.subplots(figsize=(6.4, 4.0), dpi=120)
+        for algo, c in sorted(curves(df, metric).items(), key=lambda kv: kv[0] != "twoda2c"):
+            style = STYLE.get(algo, {"label": algo, "linestyle": "--", "color": None})
+            x, y = c["epoch"].to_numpy(), c["mean"].to_numpy()
+            half = np.nan_to_num(c["half"].to_numpy(), nan=0.0)
+            ax.plot(x, y, linestyle=style["linestyle"], color=style["color"], label=style["label"], linewidth=1.8)
+            ax.fill_between(x, y - half, y + half, color=style["color"], alpha=0.2, linewidth=0)
+        if metric == "shortcut_share":
+            ax.axhline(0.5, color="grey", linewidth=0.8, linestyle="--")
+        if ylim is not None:
+            ax.set_ylim(ylim[0] - 0.02, ylim[1] + 0.02)
+        ax.set_xlabel("epoch")
+        ax.set_ylabel(ylabel)
+        ax.set_title(title, fontsize=9)
+        ax.grid(alpha=0.3)
+        ax.legend(loc="best", fontsize=8)
+        fig.tight_layout()
+        path = out_dir / filename
+        fig.savefig(path)
+        plt.close(fig)
+        paths.append(path)
+    return paths
+
+
+def final_values(df: pd.DataFrame, last_fraction: float = 0.1) -> pd.DataFrame:
+    """Per (algo, seed): the mean over the last ``last_fraction`` of the epochs (at least one)."""
+    n_last = max(1, round(float(df["epoch"].max()) * last_fraction))
+    first = df["epoch"].max() - n_last + 1
+    tail = df[df["epoch"] >= first]
+    metrics = ["goal_rate", "reward_per_step", "shortcut_share", "collision_rate"]
+    return tail.groupby(["algo", "seed"])[metrics].mean().reset_index().assign(first_epoch=first)
+
+
+def summary_table(df: pd.DataFrame, env_id: str = "", k: int | None = None, m: int | None = None) -> str:
+    """Markdown table: end-of-run values, mean and 95% interval over seeds."""
+    if df.empty:
+        return "(no results)\n"
+    fin = final_values(df)
+    first, last = int(fin["first_epoch"].iloc[0]), int(df["epoch"].max())
+    lines = [
+        f"Env `{env_id}`, {last} epochs"
+        + (f" of K={k} learning + M={m} test episodes" if k else "")
+        + f"; values averaged over epochs {first}-{last} per seed, then mean ± 95% CI over seeds.",
+        "",
+        "| algorithm | seeds | goal rate | reward per step | shortcut share | collision rate |",
+        "|---|---|---|---|---|---|",
+    ]
+    for algo in sorted(fin["algo"].unique(), key=lambda a: a != "twoda2c"):
+        f = fin[fin["algo"] == algo]
+        cells = []
+        for metric, fmt in [
+            ("goal_rate", ".2f"),
+            ("reward_per_step", ".4f"),
+            ("shortcut_share", ".2f"),
+            ("collision_rate", ".2f"),
+        ]:
+            mean, half, n = mean_ci(f[metric].to_numpy())
+            cells.append("n/a" if n == 0 else f"{mean:{fmt}} ± {half:{fmt}}" if n > 1 else f"{mean:{fmt}}")
+        label = STYLE.get(algo, {"label": algo})["label"]
+        lines.append(f"| {label} | {f['seed'].nunique()} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> None:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("csv", help="results.csv of the experiment runner")
+    p.add_argument("--out", help="folder of the figures (default: the CSV's)")
+    p.add_argument("--title", default="")
+    args = p.parse_args(argv)
+    df = pd.read_csv(args.csv)
+    out = Path(args.out or Path(args.csv).parent)
+    env_id = str(df["env"].iloc[0]) if len(df) else ""
+    for path in make_figures(df, out, title=args.title or env_id):
+        print(path)
+    print(summary_table(df, env_id=env_id))

@@ -1,0 +1,99 @@
+"""The paper's protocol (section 3.4.1) as data: presets, run specs, hyperparameter files, CSV columns.
+
+An *epoch* is K learning trials (episodes; paper: 1000) followed by M test trials (paper: 100)
+with other random numbers; S seeds per algorithm.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+METRICS = ("goal_rate", "reward_per_step", "shortcut_share", "detour_share", "collision_rate")
+COLUMNS = ["env", "algo", "seed", "epoch", "learn_episodes", *METRICS, "env_steps", "wall_s"]
+PRESETS: dict[str, dict[str, int]] = {
+    # epochs, learning trials per epoch (K), test trials per epoch (M), seeds (S)
+    "tiny": {"epochs": 3, "learn_episodes": 8, "test_episodes": 4, "seeds": 2},
+    "quick": {"epochs": 30, "learn_episodes": 1000, "test_episodes": 100, "seeds": 5},
+    "paper": {"epochs": 1000, "learn_episodes": 1000, "test_episodes": 100, "seeds": 5},
+}
+_ZOO_ONLY = ("n_timesteps", "callback", "normalize", "env_wrapper", "vec_env_wrapper", "frame_stack")
+
+
+@dataclass
+class RunSpec:
+    """Everything one (algo, seed) run needs; plain data, so it travels to a worker process or a Ray task.
+
+    ``vec_env``: ``"auto"`` (the registry's batched env where there is one), ``"batched"`` or
+    ``"dummy"`` (SB3's ``DummyVecEnv``); see :mod:`sb3_twodrl.experiments.vec_env`.
+    ``checkpoint_every``: epochs between checkpoints (0: none).
+    """
+
+    env_id: str
+    algo: str
+    seed: int
+    epochs: int
+    learn_episodes: int
+    test_episodes: int
+    hyperparams: dict[str, Any]
+    out_dir: str
+    gym_packages: list[str] = field(default_factory=list)
+    vec_env: str = "auto"
+    checkpoint_every: int = 10
+    save_model: bool = True
+    tensorboard: bool = True
+
+    def __post_init__(self) -> None:
+        for name in ("epochs", "learn_episodes", "test_episodes"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ValueError(f"{name} must be a positive int, got {value!r}")
+        if isinstance(self.checkpoint_every, bool) or not isinstance(self.checkpoint_every, int):
+            raise ValueError(f"checkpoint_every must be an int >= 0, got {self.checkpoint_every!r}")
+        if self.checkpoint_every < 0:
+            raise ValueError(f"checkpoint_every must be an int >= 0, got {self.checkpoint_every!r}")
+
+    @property
+    def name(self) -> str:
+        return f"{self.algo}_seed{self.seed}"
+
+    def protocol(self) -> dict[str, Any]:
+        """What a checkpoint must agree on to be resumed by this spec (all but paths, length and outputs)."""
+        keep = ("env_id", "algo", "seed", "learn_episodes", "test_episodes", "vec_env")
+        out = {k: v for k, v in asdict(self).items() if k in keep}
+        out["hyperparams"] = {k: repr(v) for k, v in sorted(self.hyperparams.items())}
+        return out
+
+
+def load_hyperparams(path: str | Path, env_id: str, fallback_env_id: str = "NomadOffice-v0") -> dict[str, Any]:
+    """The ``env_id`` entry (else ``fallback_env_id``'s) of an rl-zoo3 hyperparameter YAML file.
+
+    Keys only rl-zoo3 uses (``n_timesteps``, ``callback``, ...) are dropped; a ``policy_kwargs``
+    string is evaluated as rl-zoo3 does. Schedules (``lin_...``) are rejected: an epoch protocol has
+    no total budget to schedule over.
+    """
+    import yaml
+
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"hyperparameter file {str(path)!r} does not exist")
+    conf = yaml.safe_load(path.read_text()) or {}
+    entry = conf.get(env_id) or conf.get(fallback_env_id)
+    if entry is None:
+        raise ValueError(f"{path} has no entry for {env_id!r} or {fallback_env_id!r}")
+    entry = {k: v for k, v in entry.items() if k not in _ZOO_ONLY}
+    if isinstance(entry.get("policy_kwargs"), str):
+        import torch  # noqa: F401  (names available to eval, as rl-zoo3 does)
+        from torch import nn  # noqa: F401
+
+        entry["policy_kwargs"] = eval(entry["policy_kwargs"])
+    for key, value in entry.items():
+        if isinstance(value, str) and value.startswith(("lin_", "linear_")):
+            raise ValueError(f"{path}: {key} is a schedule ({value!r}); the experiment runner takes constants")
+    return entry
+
+
+def trial_seed(seed: int, epoch: int) -> int:
+    """Seed of epoch ``epoch``'s test trials: disjoint from the learning seeds (which are < 10**6)."""
+    return 10**6 + 1_000 * (seed % 10**6) + epoch

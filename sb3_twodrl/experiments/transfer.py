@@ -1,0 +1,154 @@
+"""Paper section 3.5 from the command line (``sb3-twodrl-transfer``): does database training transfer?
+
+For each algorithm and each training env (default: ``NomadOffice-v0``, the idealised simulator,
+and ``NomadOfficeMemorable-v0``, the recorded database) train with the same budget and seeds on
+the batched env (or load the final models of a reproduction, ``--reproduce-dir``), then run the
+deterministic policy for N trials on the target env (default ``NomadOfficeReal-v0``: sensor
+noise, drop-outs, slip) with a held-out seed, all N in one batched call. One row per (algorithm,
+training env): successes / trials pooled over seeds with a 95 % Wilson interval, successes per
+seed, shortcut share among successes, collisions, time-outs and the success rate of the same
+policies in their own training env (did they learn at all?).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch as th
+from stable_baselines3.common.base_class import BaseAlgorithm
+
+from sb3_twodrl.experiments.algos import ALGOS, algo_class
+from sb3_twodrl.experiments.runner import model_path
+from sb3_twodrl.experiments.trials import count_outcomes
+from sb3_twodrl.experiments.vec_env import make_test_env, make_train_env
+
+TRAIN_ENVS = ("NomadOffice-v0", "NomadOfficeMemorable-v0")
+
+
+@dataclass
+class TransferRow:
+    algo: str
+    trained_on: str
+    seeds: list[int]
+    trials_per_seed: int
+    successes: list[int] = field(default_factory=list)
+    shortcut: list[int] = field(default_factory=list)
+    collisions: list[int] = field(default_factory=list)
+    timeouts: list[int] = field(default_factory=list)
+    train_env_success: list[float] = field(default_factory=list)
+    train_seconds: list[float] = field(default_factory=list)
+
+
+def wilson(k: int, n: int, z: float = 1.959964) -> tuple[float, float]:
+    """95 % Wilson score interval of a proportion k / n."""
+    if n == 0:
+        return (0.0, 1.0)
+    p = k / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return (max(0.0, centre - half), min(1.0, centre + half))
+
+
+def train_policy(algo: str, env_id: str, seed: int, timesteps: int, n_envs: int, **kwargs) -> BaseAlgorithm:
+    """``algo`` trained ``timesteps`` steps on ``n_envs`` batched ``env_id`` envs (gamma 0.9; 2D: punishment 0.1)."""
+    kwargs = {"gamma": 0.9, **kwargs}
+    if algo.startswith("twod"):
+        kwargs.setdefault("punishment_gamma", 0.1)
+    model = algo_class(algo)("MlpPolicy", make_train_env(env_id, n_envs, seed), seed=seed, device="cpu", **kwargs)
+    return model.learn(timesteps)
+
+
+def trials(model: BaseAlgorithm, env_id: str, n: int, seed: int) -> dict[str, int]:
+    """Outcomes of ``n`` deterministic trials on ``env_id`` (sub-env ``i`` seeded ``seed + i``)."""
+    env = make_test_env(env_id, n)
+    try:
+        return count_outcomes(model, env, seed)
+    finally:
+        env.close()
+
+
+def table(rows: list[TransferRow]) -> str:
+    lines = [
+        "| algorithm | trained on | successes / N | 95 % Wilson CI | per seed | shortcut share | collisions "
+        "| time-outs | success in training env |",
+        "|" + " --- |" * 9,
+    ]
+    for row in rows:
+        n, k = row.trials_per_seed * len(row.seeds), sum(row.successes)
+        lo, hi = wilson(k, n)
+        share = f"{sum(row.shortcut) / k:.2f}" if k else "-"
+        lines.append(
+            f"| {row.algo} | {row.trained_on} | {k} / {n} ({k / n:.0%}) | {lo:.0%}-{hi:.0%} | "
+            f"{', '.join(map(str, row.successes))} | {share} | {sum(row.collisions)} | {sum(row.timeouts)} | "
+            f"{np.mean(row.train_env_success):.0%} |"
+        )
+    return "\n".join(lines)
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--quick", action="store_true", help="3 seeds, 150k steps, 50 trials (< 10 min, 2 cores)")
+    p.add_argument("--timesteps", type=int, default=300_000, help="training steps per run")
+    p.add_argument("--seeds", type=int, default=5, help="training seeds 0..S-1")
+    p.add_argument("--trials", type=int, default=100, help="trials on the target env per trained policy")
+    p.add_argument("--eval-seed", type=int, default=1_000_003, help="held-out seed of the target env's trials")
+    p.add_argument("--algos", nargs="+", default=["twoda2c", "a2c"], choices=sorted(ALGOS))
+    p.add_argument("--train-envs", nargs="+", default=list(TRAIN_ENVS))
+    p.add_argument("--target-env", default="NomadOfficeReal-v0")
+    p.add_argument("--reproduce-dir", type=Path, help="load <dir>/<train env>/models/<algo>_seed<s>.zip, no training")
+    p.add_argument("--n-envs", type=int, default=16)
+    p.add_argument("--n-steps", type=int, default=8)
+    p.add_argument("--lr", type=float, default=1e-3)
+    p.add_argument("--ent-coef", type=float, default=0.001)
+    p.add_argument("--gym-packages", nargs="*", default=["envs"], help="modules that register the envs")
+    p.add_argument("--json", type=Path, help="also write the rows as JSON")
+    args = p.parse_args(argv)
+    if args.quick:
+        args.timesteps, args.seeds, args.trials = 150_000, 3, 50
+    return args
+
+
+def transfer(args: argparse.Namespace) -> list[TransferRow]:
+    for package in args.gym_packages:
+        importlib.import_module(package)
+    th.set_num_threads(1)
+    seeds, rows, start = list(range(args.seeds)), [], time.time()
+    for algo in args.algos:
+        for env_id in args.train_envs:
+            row = TransferRow(algo, env_id, seeds, args.trials)
+            for seed in seeds:
+                t0 = time.time()
+                if args.reproduce_dir is None:
+                    hp = {"n_steps": args.n_steps, "learning_rate": args.lr, "ent_coef": args.ent_coef}
+                    model = train_policy(algo, env_id, seed, args.timesteps, args.n_envs, **hp)
+                else:
+                    model = algo_class(algo).load(model_path(args.reproduce_dir / env_id, f"{algo}_seed{seed}"))
+                row.train_seconds.append(round(time.time() - t0, 1))
+                own = trials(model, env_id, 10, seed=args.eval_seed + 10**4)
+                row.train_env_success.append(own["success"] / 10)
+                real = trials(model, args.target_env, args.trials, seed=args.eval_seed)
+                for key, values in (("success", row.successes), ("shortcut", row.shortcut)):
+                    values.append(real[key])
+                row.collisions.append(real["collision"])
+                row.timeouts.append(real["timeout"])
+                print(f"  {algo:8s} {env_id:24s} seed {seed}: own env {own['success']}/10, target {real}", flush=True)
+            rows.append(row)
+    budget = f"final models of {args.reproduce_dir}" if args.reproduce_dir else f"{args.timesteps} training steps"
+    print(
+        f"\nTransfer to {args.target_env}: {budget}, seeds {seeds}, {args.trials} deterministic trials per policy "
+        f"(held-out seed {args.eval_seed})\n\n{table(rows)}\n\ntotal {time.time() - start:.0f} s"
+    )
+    if args.json is not None:
+        args.json.write_text(json.dumps([asdict(r) for r in rows], indent=1))
+    return rows
+
+
+def main(argv: list[str] | None = None) -> None:
+    transfer(parse_args(argv))

@@ -1,0 +1,69 @@
+"""Test trials: one episode in each sub-env of a test VecEnv, every step one batched ``predict``."""
+
+from __future__ import annotations
+
+import random
+from typing import Any
+
+import numpy as np
+import torch as th
+from stable_baselines3.common.base_class import BaseAlgorithm
+from stable_baselines3.common.vec_env import VecEnv
+
+from sb3_twodrl.callbacks import EpisodeRecord, EpisodeTracker, summarize_episodes
+
+
+def run_test_trials(model: BaseAlgorithm, test_env: VecEnv, seed: int, deterministic: bool = False) -> dict[str, float]:
+    """Metrics (:func:`~sb3_twodrl.callbacks.summarize_episodes`) of one trial per sub-env of ``test_env``.
+
+    Sub-env ``i`` is reset with seed ``seed + i``; the policy samples with torch, numpy and Python
+    generators seeded by ``seed``, and the caller's generator states are restored afterwards, so a
+    test never perturbs the learning run. A sub-env that finished its trial keeps stepping (the
+    batch moves together) but is not counted again.
+    """
+    n = test_env.num_envs
+    np_state, py_state = np.random.get_state(), random.getstate()
+    try:
+        with th.random.fork_rng(devices=[]):
+            th.manual_seed(seed)
+            np.random.seed(seed % 2**32)
+            random.seed(seed)
+            test_env.seed(seed)
+            obs = test_env.reset()
+            tracker = EpisodeTracker(n)
+            records: list[EpisodeRecord | None] = [None] * n
+            while any(r is None for r in records):
+                actions, _ = model.predict(obs, deterministic=deterministic)
+                obs, rewards, dones, infos = test_env.step(actions)
+                ended = np.flatnonzero(dones).tolist()
+                for i, record in zip(ended, tracker.step(infos, dones, rewards), strict=True):
+                    if records[i] is None:
+                        records[i] = record
+    finally:
+        np.random.set_state(np_state)
+        random.setstate(py_state)
+    return summarize_episodes(r for r in records if r is not None)
+
+
+def count_outcomes(model: BaseAlgorithm, test_env: VecEnv, seed: int, deterministic: bool = True) -> dict[str, Any]:
+    """Successes, shortcut successes, collisions and time-outs of one trial per sub-env (transfer tables)."""
+    n = test_env.num_envs
+    with th.random.fork_rng(devices=[]):
+        th.manual_seed(seed)
+        test_env.seed(seed)
+        obs = test_env.reset()
+        outcome: list[dict[str, Any] | None] = [None] * n
+        while any(o is None for o in outcome):
+            actions, _ = model.predict(obs, deterministic=deterministic)
+            obs, _, dones, infos = test_env.step(actions)
+            for i in np.flatnonzero(dones):
+                if outcome[i] is None:
+                    outcome[i] = infos[i]
+    done = [o for o in outcome if o is not None]
+    success = [bool(o.get("is_success")) for o in done]
+    return {
+        "success": sum(success),
+        "shortcut": sum(s and o.get("route") == "shortcut" for s, o in zip(success, done, strict=True)),
+        "collision": sum(not s and bool(o.get("collision")) for s, o in zip(success, done, strict=True)),
+        "timeout": sum(not s and not o.get("collision") for s, o in zip(success, done, strict=True)),
+    }

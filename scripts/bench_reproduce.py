@@ -1,0 +1,98 @@
+#!/usr/bin/env python
+"""Throughput of the paper's protocol, both arms measured side by side in one run (issue 13 targets).
+
+For each n_envs: one (algo, seed) run per arm of ``--epochs`` paper-sized epochs (K learning
+trials, then M test trials, batched pipeline, exactly as ``reproduce.py`` runs them; no
+TensorBoard, checkpoints or models), timed by the process's CPU time (the machine is shared).
+Prints learning env-steps per CPU second (target >= 100,000), TwoDimA2C / A2C (target >= 0.9),
+the per-env pipeline of the old protocol (DummyVecEnv, ``--dummy-n-envs``) for comparison, and
+the projected wall time of the paper preset (1000 epochs, 2 arms x 5 seeds) on ``--cores`` cores,
+for the mean learning-episode length measured here and for episodes that all run to the time limit.
+
+    OMP_NUM_THREADS=1 nice -n 10 python scripts/bench_reproduce.py --env NomadOffice-v0
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # run from a checkout without installing
+
+import gymnasium as gym  # noqa: E402
+
+import envs  # noqa: E402, F401  (registers the IDs)
+from sb3_twodrl.experiments import PRESETS, RunSpec, load_hyperparams, run_pair  # noqa: E402
+
+
+def measure(env_id: str, algo: str, n_envs: int, vec_env: str, args: argparse.Namespace) -> dict[str, float]:
+    hp = load_hyperparams(ROOT / "scripts" / "hyperparams" / f"{algo}.yml", env_id)
+    hp["n_envs"] = n_envs
+    with tempfile.TemporaryDirectory() as out:
+        spec = RunSpec(env_id, algo, args.seed, args.epochs, args.learn_episodes, args.test_episodes, hp, out)
+        spec.vec_env, spec.checkpoint_every, spec.save_model, spec.tensorboard = vec_env, 0, False, False
+        cpu, wall = time.process_time(), time.perf_counter()
+        rows = run_pair(spec)
+        cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
+    steps = rows[-1]["env_steps"]
+    return {
+        "steps": steps,
+        "cpu_s": cpu,
+        "wall_s": wall,
+        "rate": steps / cpu,
+        "length": steps / (args.epochs * args.learn_episodes),
+    }
+
+
+def main() -> None:
+    paper = PRESETS["paper"]
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--env", default="NomadOffice-v0")
+    p.add_argument("--n-envs", type=int, nargs="+", help="batched n_envs to measure (default: the YAML's)")
+    p.add_argument("--dummy-n-envs", type=int, default=16, help="n_envs of the per-env comparison (0: skip)")
+    p.add_argument("--epochs", type=int, default=3, help="epochs per measured run")
+    p.add_argument("--learn-episodes", "-K", type=int, default=paper["learn_episodes"])
+    p.add_argument("--test-episodes", "-M", type=int, default=paper["test_episodes"])
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--cores", type=int, default=2, help="cores of the projection")
+    args = p.parse_args()
+    arms = ("a2c", "twoda2c")
+    default_n = int(load_hyperparams(ROOT / "scripts" / "hyperparams" / "a2c.yml", args.env).get("n_envs", 1))
+    configs = [("batched", n) for n in (args.n_envs or [default_n])]
+    if args.dummy_n_envs:
+        configs.append(("dummy", args.dummy_n_envs))
+    results = {}
+    for vec_env, n in configs:
+        for algo in arms:  # the two arms back to back, so they see the same machine load
+            results[vec_env, n, algo] = r = measure(args.env, algo, n, vec_env, args)
+            print(
+                f"{vec_env:8s} n_envs={n:5d} {algo:8s}: {r['steps']:9,d} steps in {r['cpu_s']:7.1f} CPU s "
+                f"({r['wall_s']:.1f} s wall): {r['rate']:9,.0f} env-steps/CPU s, mean episode {r['length']:.1f}",
+                flush=True,
+            )
+    limit = gym.spec(args.env).max_episode_steps
+    n_runs, epochs, k = 2 * paper["seeds"], paper["epochs"], paper["learn_episodes"]
+    print(f"\n{args.env}, {args.epochs} epochs of K={args.learn_episodes}, M={args.test_episodes}, seed {args.seed}")
+    print(
+        "| pipeline | n_envs | A2C env-steps/s | TwoDimA2C env-steps/s | TwoDimA2C / A2C | paper preset on "
+        f"{args.cores} cores, measured episode length | ... every episode {limit} steps |"
+    )
+    print("|---|---|---|---|---|---|---|")
+    for vec_env, n in configs:
+        a, t = results[vec_env, n, "a2c"], results[vec_env, n, "twoda2c"]
+        hours = []
+        for length in (None, limit):
+            cpu = sum(epochs * k * (length or r["length"]) / r["rate"] for r in (a, t)) * n_runs / 2
+            hours.append(cpu / args.cores / 3600)
+        print(
+            f"| {vec_env} | {n} | {a['rate']:,.0f} | {t['rate']:,.0f} | {t['rate'] / a['rate']:.2f} | "
+            f"{hours[0]:,.1f} h | {hours[1]:,.1f} h |"
+        )
+
+
+if __name__ == "__main__":
+    main()

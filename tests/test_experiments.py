@@ -1,0 +1,118 @@
+"""sb3_twodrl.experiments: batched == per-env rows, kill-and-resume == uninterrupted rows, the adapter, bad input."""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import os
+import signal
+from dataclasses import replace
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.vector import AutoresetMode, SyncVectorEnv
+
+import envs  # noqa: F401  (registers the IDs)
+from sb3_twodrl.experiments import RunSpec, VectorEnvAdapter, algo_class, make_train_env, run_pair
+from sb3_twodrl.experiments import runner as runner_module
+from sb3_twodrl.experiments.runner import checkpoint_path, progress_path
+
+ENV = "NomadOffice-v0"
+HP = {
+    "twoda2c": {"n_envs": 4, "gamma": 0.9, "punishment_gamma": 0.1, "n_steps": 5, "reward_split": "info"},
+    "a2c": {"n_envs": 4, "gamma": 0.9, "n_steps": 5},
+}
+
+
+def spec(tmp_path, algo: str, **kwargs) -> RunSpec:
+    base = RunSpec(ENV, algo, 3, epochs=4, learn_episodes=8, test_episodes=4, hyperparams=HP[algo], out_dir="")
+    return replace(base, out_dir=str(tmp_path), gym_packages=["envs"], tensorboard=False, **kwargs)
+
+
+def without_wall(rows: list[dict]) -> list[dict]:
+    return [{k: v for k, v in row.items() if k != "wall_s"} for row in rows]
+
+
+@pytest.mark.parametrize("algo", ["twoda2c", "a2c"])
+def test_batched_pipeline_gives_the_per_env_rows(tmp_path, algo):
+    batched = run_pair(spec(tmp_path / "batched", algo, vec_env="batched"))
+    per_env = run_pair(spec(tmp_path / "dummy", algo, vec_env="dummy"))
+    assert len(batched) == 4 and [r["learn_episodes"] for r in batched] == [8, 16, 24, 32]
+    assert without_wall(batched) == without_wall(per_env)
+
+
+def _run_and_die(s: RunSpec, die_at_epoch: int) -> None:
+    """Worker that is killed (SIGKILL, no clean-up) when it starts the test trials of ``die_at_epoch``."""
+    original, calls = runner_module.run_test_trials, []
+
+    def dying(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == die_at_epoch:
+            os.kill(os.getpid(), signal.SIGKILL)
+        return original(*args, **kwargs)
+
+    runner_module.run_test_trials = dying
+    run_pair(s)
+
+
+@pytest.mark.parametrize("algo", ["twoda2c", "a2c"])
+def test_a_killed_run_resumes_with_the_uninterrupted_rows(tmp_path, algo):
+    uninterrupted = run_pair(spec(tmp_path / "whole", algo, checkpoint_every=2))
+    killed = spec(tmp_path / "killed", algo, checkpoint_every=2)
+    worker = mp.get_context("spawn").Process(target=_run_and_die, args=(killed, 4))
+    worker.start()
+    worker.join(120)
+    assert worker.exitcode == -signal.SIGKILL
+    assert checkpoint_path(killed.out_dir, killed.name).exists()
+    assert progress_path(killed.out_dir, killed.name).read_text().split() == ["1", "2", "3"]
+    resumed = run_pair(killed)
+    assert without_wall(resumed) == without_wall(uninterrupted)
+    model = algo_class(algo).load(tmp_path / "killed" / "models" / f"{algo}_seed3.zip")
+    assert model.num_timesteps >= resumed[-1]["env_steps"]
+
+
+def test_checkpoint_of_another_protocol_is_refused(tmp_path):
+    s = spec(tmp_path, "a2c", checkpoint_every=1)
+    run_pair(s)
+    with pytest.raises(ValueError, match="another protocol"):
+        run_pair(replace(s, learn_episodes=9))
+
+
+def test_adapter_splits_masked_infos_and_marks_episode_ends():
+    venv = gym.make_vec(ENV, num_envs=3, vectorization_mode="vector_entry_point")
+    adapter = VectorEnvAdapter(venv)
+    adapter.seed(0)
+    obs = adapter.reset()
+    assert obs.shape == (3, *venv.single_observation_space.shape)
+    infos = adapter._split_infos({"a": np.array([1.0, 2.0, 3.0]), "_a": np.array([True, False, True])})
+    assert infos == [{"a": 1.0}, {}, {"a": 3.0}]
+    for _ in range(300):
+        obs, _, dones, infos = adapter.step(np.zeros(3, dtype=np.int64))  # north until a wall
+        if dones.any():
+            i = int(np.flatnonzero(dones)[0])
+            assert infos[i]["terminal_observation"].shape == obs[i].shape
+            assert infos[i]["TimeLimit.truncated"] is False and infos[i]["collision"] is True
+            break
+    else:
+        pytest.fail("no episode ended")
+
+
+def test_bad_input_names_the_argument():
+    with pytest.raises(ValueError, match="same step"):
+        VectorEnvAdapter(SyncVectorEnv([lambda: gym.make("CartPole-v1")], autoreset_mode=AutoresetMode.NEXT_STEP))
+    with pytest.raises(ValueError, match="vec_env='batched'"):
+        make_train_env("CartPole-v1", 2, 0, mode="batched")
+    with pytest.raises(ValueError, match="vec_env must be"):
+        make_train_env(ENV, 2, 0, mode="fast")
+    with pytest.raises(ValueError, match="algo must be one of"):
+        algo_class("dqn")
+    with pytest.raises(ValueError, match="learn_episodes must be a positive int"):
+        RunSpec(ENV, "a2c", 0, epochs=1, learn_episodes=0, test_episodes=1, hyperparams={}, out_dir="x")
+    with pytest.raises(ValueError, match="checkpoint_every"):
+        RunSpec(ENV, "a2c", 0, 1, 1, 1, {}, "x", checkpoint_every=-1)
+
+
+def test_cartpole_falls_back_to_per_env():
+    """CartPole's registered vector env resets on the next step, which SB3 cannot use: auto picks DummyVecEnv."""
+    assert type(make_train_env("CartPole-v1", 2, 0)).__name__ == "DummyVecEnv"
+    assert type(make_train_env(ENV, 2, 0)) is VectorEnvAdapter
