@@ -1,7 +1,7 @@
 """The paper's experiments as a library (rl-zoo3 keeps its ``ExperimentManager`` in the package too).
 
 - :mod:`.protocol`: presets, :class:`RunSpec`, hyperparameter files, CSV columns;
-- :mod:`.algos`: algorithm names (``ALGOS``: ``"name" -> "module:Class"``);
+- :mod:`.algos`: algorithm names (``ALGOS``, the package's ``name -> class`` table);
 - :mod:`.vec_env`: batched VecEnvs found through the Gymnasium registry's ``vector_entry_point``;
 - :mod:`.trials`: an epoch's test trials in one batched call per step;
 - :mod:`.runner`: one (algo, seed) run, epochs of exactly K learning trials, checkpoints, resume;

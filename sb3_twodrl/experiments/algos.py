@@ -1,21 +1,14 @@
-"""Algorithm names of the experiment runner: ``name -> "module:Class"``, imported on first use."""
+"""Algorithm names of the experiment runner: the package's table :data:`sb3_twodrl.ALGOS`."""
 
 from __future__ import annotations
 
-import importlib
-
 from stable_baselines3.common.base_class import BaseAlgorithm
 
-ALGOS: dict[str, str] = {
-    "twoda2c": "sb3_twodrl:TwoDimA2C",
-    "a2c": "stable_baselines3:A2C",
-    "ppo": "stable_baselines3:PPO",
-}
+from sb3_twodrl import ALGOS
 
 
 def algo_class(name: str) -> type[BaseAlgorithm]:
-    """The class registered as ``name`` in :data:`ALGOS`."""
+    """The class registered as ``name`` in :data:`sb3_twodrl.ALGOS`."""
     if name not in ALGOS:
         raise ValueError(f"algo must be one of {sorted(ALGOS)}, got {name!r}")
-    module, cls = ALGOS[name].split(":")
-    return getattr(importlib.import_module(module), cls)
+    return ALGOS[name]
