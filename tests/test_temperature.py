@@ -137,3 +137,14 @@ def test_temperature_scales_the_gsde_noise(squash_output: bool) -> None:
     assert deviations[0].abs().min() > 0
     assert th.allclose(deviations[1], 3.0 * deviations[0], rtol=1e-3)
     assert th.allclose(stds[1], 3.0 * stds[0], rtol=1e-5)
+
+
+@pytest.mark.parametrize("use_sde", [False, True])
+def test_a_gaussian_at_interest_zero_takes_the_ceiling(use_sde: bool) -> None:
+    """An episode's first step (interest 0) is uniform for categorical actions; a Gaussian has no
+    uniform limit, so it acts at ``max_temperature``, the most random it can be, not at the floor."""
+    model = TwoDimA2C("MlpPolicy", "Pendulum-v1", use_sde=use_sde, max_temperature=8.0, seed=0)
+    inverse = model.policy.inverse_temperature(np.array([0.0, 2.0, 100.0], dtype=np.float32))
+    np.testing.assert_allclose(inverse, [1 / 8.0, 1 / 2.0, 1 / 8.0])
+    categorical = TwoDimA2C("MlpPolicy", LatticeCorridor(), max_temperature=8.0, seed=0).policy
+    np.testing.assert_allclose(categorical.inverse_temperature(np.array([0.0, 2.0], dtype=np.float32)), [0.0, 0.5])

@@ -185,7 +185,11 @@ class TwoDimPolicyMixin:
         if self.interest != "paper":
             interest = relative_interest(np.maximum(interest, 0.0), self.running_interest.item())
         inverse = np.reciprocal(np.minimum(np.maximum(interest, self.min_temperature), self.max_temperature))
-        if self.interest != "learned" and not isinstance(self.action_dist, _GAUSSIANS):
+        if self.interest == "learned":
+            return inverse
+        if isinstance(self.action_dist, _GAUSSIANS):
+            inverse[interest == 0] = 1.0 / self.max_temperature
+        else:
             inverse *= interest > 0
         return inverse
 
