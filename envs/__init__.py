@@ -22,42 +22,25 @@ from gymnasium import register
 
 MAX_EPISODE_STEPS = 300
 
-register(
-    id="NomadOffice-v0",
-    entry_point="envs.nomad.office:NomadOfficeEnv",
-    vector_entry_point="envs.nomad.batched:BatchedNomadOffice",
-    max_episode_steps=MAX_EPISODE_STEPS,
-)
-register(
-    id="NomadOfficeReal-v0",
-    entry_point="envs.nomad.realistic:NomadOfficeRealEnv",
-    vector_entry_point="envs.nomad.realistic_batched:BatchedNomadOfficeReal",
-    max_episode_steps=MAX_EPISODE_STEPS,
-)
-register(
-    id="NomadOfficeMemorable-v0",
-    entry_point="envs.memorable.env:NomadOfficeMemorableEnv",
-    vector_entry_point="envs.memorable.env:BatchedNomadOfficeMemorable",
-    max_episode_steps=MAX_EPISODE_STEPS,
-)
-register(
-    id="NomadOfficeOpen-v0",
-    entry_point="envs.nomad.office:NomadOfficeEnv",
-    vector_entry_point="envs.nomad.batched:BatchedNomadOffice",
-    max_episode_steps=MAX_EPISODE_STEPS,
-    kwargs={"map": "open"},
-)
-register(
-    id="NomadOfficeRealOpen-v0",
-    entry_point="envs.nomad.realistic:NomadOfficeRealEnv",
-    vector_entry_point="envs.nomad.realistic_batched:BatchedNomadOfficeReal",
-    max_episode_steps=MAX_EPISODE_STEPS,
-    kwargs={"map": "open"},
-)
-register(
-    id="NomadOfficeMemorableOpen-v0",
-    entry_point="envs.memorable.env:NomadOfficeMemorableEnv",
-    vector_entry_point="envs.memorable.env:BatchedNomadOfficeMemorable",
-    max_episode_steps=MAX_EPISODE_STEPS,
-    kwargs={"map": "open"},
-)
+for suffix, kwargs in (("", {}), ("Open", {"map": "open"})):
+    register(
+        id=f"NomadOffice{suffix}-v0",
+        entry_point="envs.nomad.office:NomadOfficeEnv",
+        vector_entry_point="envs.nomad.batched:BatchedNomadOffice",
+        max_episode_steps=MAX_EPISODE_STEPS,
+        kwargs=dict(kwargs),
+    )
+    register(
+        id=f"NomadOfficeReal{suffix}-v0",
+        entry_point="envs.nomad.realistic:NomadOfficeRealEnv",
+        vector_entry_point="envs.nomad.realistic_batched:BatchedNomadOfficeReal",
+        max_episode_steps=MAX_EPISODE_STEPS,
+        kwargs=dict(kwargs),
+    )
+    register(
+        id=f"NomadOfficeMemorable{suffix}-v0",
+        entry_point="envs.memorable.env:NomadOfficeMemorableEnv",
+        vector_entry_point="envs.memorable.env:BatchedNomadOfficeMemorable",
+        max_episode_steps=MAX_EPISODE_STEPS,
+        kwargs=dict(kwargs),
+    )

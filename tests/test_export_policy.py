@@ -25,13 +25,7 @@ def test_exported_actions_equal_deterministic_predict(tmp_path, algo):
     extra = {"meta.json": ""}
     loaded = th.jit.load(str(path), _extra_files=extra)
     assert json.loads(extra["meta.json"])["algorithm"] == algo.__name__
-    rng = np.random.default_rng(0)
-    real = gym.make("envs:NomadOfficeReal-v0")
-    obs = [real.reset(seed=1)[0]]
-    for _ in range(60):
-        o, _, term, trunc, _ = real.step(int(rng.integers(4)))
-        obs.append(real.reset()[0] if term or trunc else o)
-    batch = np.concatenate([np.stack(obs), rng.random((200, 34), dtype=np.float32)])
+    batch = _observations(200, seed=1)
     expected, _ = model.predict(batch, deterministic=True)
     got = loaded(th.as_tensor(batch)).numpy()
     assert got.dtype == np.int64 and np.array_equal(got, expected)
@@ -52,10 +46,11 @@ def test_cli(tmp_path):
     assert out.stdout.strip() in {"0", "1", "2", "3"}
 
 
-def _observations(n_random: int) -> np.ndarray:
+def _observations(n_random: int, seed: int = 2) -> np.ndarray:
+    """61 readings of the stand-in robot under random moves (reset with ``seed``), then ``n_random`` random vectors."""
     rng = np.random.default_rng(0)
     real = gym.make("envs:NomadOfficeReal-v0")
-    obs = [real.reset(seed=2)[0]]
+    obs = [real.reset(seed=seed)[0]]
     for _ in range(60):
         o, _, term, trunc, _ = real.step(int(rng.integers(4)))
         obs.append(real.reset()[0] if term or trunc else o)
