@@ -1,40 +1,75 @@
-"""scripts/ablation.py: the arms differ only in their 2D settings, and a run reports every metric."""
+"""The ablation (issue 11): arms differ only in their 2D settings, the fixed arms take the paper arm's temperature."""
 
 from __future__ import annotations
 
+import json
 import math
-import sys
 from pathlib import Path
 
+import pandas as pd
 import pytest
-from stable_baselines3 import A2C
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "scripts"))
+from sb3_twodrl.experiments import ablation
+from sb3_twodrl.experiments.grid import collect_results
 
-import ablation  # noqa: E402
+BASE = {
+    "a2c": {"n_envs": 4, "n_steps": 5, "gamma": 0.9, "learning_rate": 3e-3},
+    "twoda2c": {"n_envs": 4, "n_steps": 5, "gamma": 0.9, "learning_rate": 3e-3, "punishment_gamma": 0.1},
+}
 
-from sb3_twodrl import TwoDimA2C  # noqa: E402
 
-
-@pytest.mark.parametrize("arm", ablation.ARMS)
+@pytest.mark.parametrize("arm", sorted(ablation.ARMS))
 def test_arms_share_every_non_2d_setting(arm: str) -> None:
-    model = ablation.make_model(arm, seed=0, temperature=0.5)
-    assert type(model) is (A2C if arm == "a2c" else TwoDimA2C)
-    for name, value in ablation.SHARED.items():
-        assert getattr(model, name) == value or str(getattr(model, name)) == value, name
-    if arm in ("a2c_fixed", "twod_fixed"):
-        assert model.temperature == 0.5 and model.preferences == "raw"
+    algo, hp = ablation.arm_hyperparams(arm, BASE, temperature=0.7)
+    for key, value in BASE["a2c"].items():
+        assert hp[key] == value, key
+    assert (algo == "a2c") == (arm == "a2c")
+    if arm in ablation.FIXED:
+        assert hp["temperature"] == 0.7 and hp["preferences"] == "raw"
+    else:
+        assert "temperature" not in hp
     if arm == "a2c_fixed":
-        assert model.punishment_weight == 0.0 and model.punishment_vf_coef == 0.0
+        assert hp["reward_split"] == "none" and hp["punishment_weight"] == 0.0 == hp["punishment_vf_coef"]
 
 
-def test_a_run_reports_every_metric() -> None:
-    result = ablation.run("relative_bounded", seed=0, epochs=2, epoch_steps=320, robots=4, temperature=None)
-    assert len(result["goal_rates"]) == 2
-    for key in ablation.METRICS:
-        assert key in result
-    assert 0.0 < result["interest_share"] <= 1.0
-    assert result["mean_temperature"] > 0
+def test_a_fixed_arm_without_a_temperature_is_an_error() -> None:
+    with pytest.raises(ValueError, match="twod_fixed"):
+        ablation.arm_hyperparams("twod_fixed", BASE, temperature=None)
+    with pytest.raises(ValueError, match="arm must be one of"):
+        ablation.arm_hyperparams("softmax", BASE, temperature=None)
+
+
+def rows(rates: list[float], shares: list[float]) -> pd.DataFrame:
+    steps = [1000 * (i + 1) for i in range(len(rates))]
+    metrics = {"shortcut_share": 0.5, "reward_per_step": 0.1}
+    return pd.DataFrame({"goal_rate": rates, "env_steps": steps, "interest_share": shares, **metrics})
+
+
+def test_run_summary_counts_collapse_learning_and_the_interest_share() -> None:
+    summary = ablation.summarize_run(rows([0.1, 0.9, 0.4, 0.3, 0.2, 0.9], [0.0, 0.2, 0.2, 0.2, 0.2, 0.2]))
+    assert summary["learned"] == 1.0 and summary["epochs_to_half"] == 2.0 and summary["collapsed"] == 1.0
+    assert summary["interest_share"] == pytest.approx(1.0 / 6.0)
+    held = ablation.summarize_run(rows([0.9, 0.4, 0.3, 0.9, 0.4], [math.nan] * 5))
+    assert held["collapsed"] == 0.0 and held["learned"] == 0.0 and math.isnan(held["interest_share"])
+    never = ablation.summarize_run(rows([0.0, 0.1], [0.5, 0.5]))
+    assert math.isnan(never["epochs_to_half"]) and never["collapsed"] == 0.0
+
+
+def test_interval_of_a_share_of_seeds() -> None:
     mean, low, high, n = ablation.interval([0.0, 1.0, 1.0, 0.0], count=True)
-    assert n == 4 and low < mean == 0.5 < high and not math.isnan(low)
+    assert n == 4 and low < mean == 0.5 < high
+
+
+def test_tiny_ablation_end_to_end(tmp_path: Path) -> None:
+    argv = ["--out", str(tmp_path), "--seeds", "0", "--epochs", "2", "-K", "4", "-M", "3", "--backend", "serial"]
+    runs = ablation.ablation([*argv, "--arms", "a2c", "paper", "twod_fixed", "relative_bounded"])
+    assert sorted(runs) == ["a2c", "paper", "relative_bounded", "twod_fixed"]
+    assert all(len(mine) == 1 for mine in runs.values())
+    assert math.isnan(runs["a2c"][0]["interest_share"]) and runs["twod_fixed"][0]["interest_share"] == 0.0
+    assert 0.0 < runs["relative_bounded"][0]["interest_share"] <= 1.0
+    paper = collect_results(tmp_path / "paper")
+    temperature = json.loads((tmp_path / "fixed_temperature.json").read_text())["temperature"]
+    assert temperature == pytest.approx(ablation.mean_temperature(paper)) and temperature >= 0.5
+    fixed = collect_results(tmp_path / "twod_fixed")
+    assert fixed["mean_temperature"].dropna().to_numpy() == pytest.approx(temperature, rel=1e-5)
+    assert (tmp_path / "table.md").read_text().count("\n") == 2 + 4 and (tmp_path / "ablation.png").exists()

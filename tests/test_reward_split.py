@@ -14,11 +14,13 @@ FEEDBACK: dict[str, list[tuple[float, dict[str, Any]]]] = {
     "info": [(4.99, {"punishment": 0.01}), (-1.0, {"punishment": 1.0})],
     "cost": [(2.0, {"cost": 0.5}), (-3.0, {"cost": 0.0})],
     "sign": [(2.0, {}), (-3.0, {})],
+    "none": [(2.0, {"punishment": 1.0}), (-3.0, {})],
 }
 EXPECTED = {
     "info": ([5.0, 0.0], [0.01, 1.0]),
     "cost": ([2.0, -3.0], [0.5, 0.0]),
     "sign": ([2.0, 0.0], [0.0, 3.0]),
+    "none": ([2.0, -3.0], [0.0, 0.0]),
 }
 
 
@@ -28,7 +30,7 @@ def rollout_streams(feedback: list, reward_split: Any) -> tuple[np.ndarray, np.n
     return model.rollout_buffer.rewards[:, 0], model.rollout_buffer.punishments[:, 0]
 
 
-@pytest.mark.parametrize("mode", ["info", "cost", "sign"])
+@pytest.mark.parametrize("mode", ["info", "cost", "sign", "none"])
 def test_named_modes(mode: str) -> None:
     rewards, punishments = rollout_streams(FEEDBACK[mode], mode)
     reward_r, reward_p = EXPECTED[mode]

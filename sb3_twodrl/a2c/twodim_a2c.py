@@ -40,7 +40,8 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
     :param punishment_vf_coef: loss weight of the punishment critic; None: ``vf_coef``
     :param punishment_weight: ``w`` in the utility ``A_R - w * A_P`` (eq. 1 is ``w = 1``)
     :param reward_split: how ``(reward, info)`` becomes ``(r_R, r_P)``: ``"auto"``, ``"info"``,
-        ``"cost"``, ``"sign"`` or a callable (see ``sb3_twodrl.common.splitting``)
+        ``"cost"``, ``"sign"``, ``"none"`` (``r_R = r``, ``r_P = 0``) or a callable
+        (see ``sb3_twodrl.common.splitting``)
     :param temperature: ``"interest"`` (eq. 9, ``T`` set by the interest) or a fixed positive temperature
     :param interest: how the interest sets ``T``: ``"paper"`` (eq. 9 literally: ``T = delta+`` of the
         transition into the state), ``"relative"`` (``delta+`` over its running mean) or ``"learned"``

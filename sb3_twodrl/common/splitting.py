@@ -15,7 +15,7 @@ import numpy as np
 RewardSplit = Callable[[float, dict[str, Any]], tuple[float, float]]
 BatchSplit = Callable[[np.ndarray, Sequence[dict[str, Any]]], tuple[np.ndarray, np.ndarray]]
 
-SPLIT_MODES = ("auto", "info", "cost", "sign")
+SPLIT_MODES = ("auto", "info", "cost", "sign", "none")
 
 
 def _info_values(infos: Sequence[dict[str, Any]], key: str, mode: str) -> np.ndarray:
@@ -57,6 +57,11 @@ def split_sign(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np
     return reward_r, reward_r - rewards
 
 
+def split_none(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
+    """One stream: ``r_R`` is the whole reward, ``r_P = 0`` (with ``punishment_weight=0``, A2C's signal)."""
+    return rewards, np.zeros_like(rewards)
+
+
 def split_auto(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
     """Per env: ``info`` if ``info["punishment"]`` exists, else ``cost`` if ``info["cost"]`` exists, else ``sign``."""
     keyed = ["punishment" in info or "cost" in info for info in infos]
@@ -71,7 +76,13 @@ def split_auto(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np
     return reward_r, reward_p
 
 
-_SPLITS: dict[str, BatchSplit] = {"auto": split_auto, "info": split_info, "cost": split_cost, "sign": split_sign}
+_SPLITS: dict[str, BatchSplit] = {
+    "auto": split_auto,
+    "info": split_info,
+    "cost": split_cost,
+    "sign": split_sign,
+    "none": split_none,
+}
 
 
 def make_reward_split(reward_split: str | RewardSplit) -> BatchSplit:

@@ -11,7 +11,10 @@ from pathlib import Path
 from typing import Any
 
 METRICS = ("goal_rate", "reward_per_step", "shortcut_share", "detour_share", "collision_rate")
-COLUMNS = ["env", "algo", "seed", "epoch", "learn_episodes", *METRICS, "env_steps", "wall_s"]
+LEARNING = ("interest_share", "mean_temperature")
+"""Per epoch, over the learning steps of the rollouts that ended in it: the share of actions whose
+temperature the interest (not a clamp) set, and the mean temperature (NaN for stock SB3 algorithms)."""
+COLUMNS = ["env", "algo", "seed", "epoch", "learn_episodes", *METRICS, *LEARNING, "env_steps", "wall_s"]
 PRESETS: dict[str, dict[str, int]] = {
     # epochs, learning trials per epoch (K), test trials per epoch (M), seeds (S)
     "tiny": {"epochs": 3, "learn_episodes": 8, "test_episodes": 4, "seeds": 2},
@@ -27,7 +30,8 @@ class RunSpec:
 
     ``vec_env``: ``"auto"`` (the registry's batched env where there is one), ``"batched"`` or
     ``"dummy"`` (SB3's ``DummyVecEnv``); see :mod:`sb3_twodrl.experiments.vec_env`.
-    ``checkpoint_every``: epochs between checkpoints (0: none).
+    ``checkpoint_every``: epochs between checkpoints (0: none). ``env_kwargs``: passed to the env's
+    constructor for learning and test trials alike (e.g. ``{"observe_odometry": False}``).
     """
 
     env_id: str
@@ -43,6 +47,7 @@ class RunSpec:
     checkpoint_every: int = 10
     save_model: bool = True
     tensorboard: bool = True
+    env_kwargs: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         for name in ("epochs", "learn_episodes", "test_episodes"):
@@ -60,7 +65,7 @@ class RunSpec:
 
     def protocol(self) -> dict[str, Any]:
         """What a checkpoint must agree on to be resumed by this spec (all but paths, length and outputs)."""
-        keep = ("env_id", "algo", "seed", "learn_episodes", "test_episodes", "vec_env")
+        keep = ("env_id", "algo", "seed", "learn_episodes", "test_episodes", "vec_env", "env_kwargs")
         out = {k: v for k, v in asdict(self).items() if k in keep}
         out["hyperparams"] = {k: repr(v) for k, v in sorted(self.hyperparams.items())}
         return out

@@ -32,7 +32,7 @@ from stable_baselines3.common.vec_env import VecEnv
 from sb3_twodrl.callbacks import NavigationMetricsCallback
 from sb3_twodrl.experiments.algos import algo_class
 from sb3_twodrl.experiments.checkpoint import load_checkpoint, save_checkpoint, set_rng_state
-from sb3_twodrl.experiments.protocol import METRICS, RunSpec, trial_seed
+from sb3_twodrl.experiments.protocol import LEARNING, METRICS, RunSpec, trial_seed
 from sb3_twodrl.experiments.trials import run_test_trials
 from sb3_twodrl.experiments.vec_env import make_test_env, make_train_env
 
@@ -79,6 +79,24 @@ class EpochCallback(BaseCallback):
             extra = {**s, "elapsed": self.elapsed(), "nav": nav}
             save_checkpoint(checkpoint_path(self.spec.out_dir, self.spec.name), self.model, extra)
 
+    def _on_rollout_end(self) -> None:
+        """Tally the rollout's temperatures (2D-RL algorithms: ``inverse_temperatures`` in the buffer)."""
+        inverse = getattr(self.model.rollout_buffer, "inverse_temperatures", None)
+        if inverse is None:
+            return
+        tally = self.state.setdefault("learning", [0, 0, 0.0, 0])  # interest-set, actions, sum of T, tempered
+        tempered = inverse[inverse > 0]
+        tally[0] += round(self.model.interest_share(inverse) * inverse.size)
+        tally[1] += inverse.size
+        tally[2] += float(np.sum(1.0 / tempered, dtype=np.float64))
+        tally[3] += tempered.size
+
+    def _learning_metrics(self) -> dict[str, float]:
+        """:data:`~.protocol.LEARNING` of the rollouts that ended since the last epoch; the tally restarts."""
+        inside, steps, temperature, tempered = self.state.pop("learning", [0, 0, 0.0, 0])
+        share = inside / steps if steps else math.nan
+        return dict(zip(LEARNING, (share, temperature / tempered if tempered else math.nan), strict=True))
+
     def _on_step(self) -> bool:
         s, spec = self.state, self.spec
         s["episodes"] += int(np.sum(self.locals["dones"]))
@@ -92,6 +110,7 @@ class EpochCallback(BaseCallback):
                 "epoch": s["epoch"],
                 "learn_episodes": s["epoch"] * spec.learn_episodes,
                 **{key: metrics.get(key, math.nan) for key in METRICS},
+                **self._learning_metrics(),
                 "env_steps": int(self.num_timesteps),
                 "wall_s": round(self.elapsed(), 3),
             }
@@ -110,7 +129,7 @@ def _new_model(spec: RunSpec) -> BaseAlgorithm:
     hp = dict(spec.hyperparams)
     n_envs = int(hp.pop("n_envs", 1))
     policy = hp.pop("policy", "MlpPolicy")
-    env = make_train_env(spec.env_id, n_envs, spec.seed, spec.vec_env)
+    env = make_train_env(spec.env_id, n_envs, spec.seed, spec.vec_env, spec.env_kwargs)
     tb = str(Path(spec.out_dir) / "tb") if spec.tensorboard else None
     return algo_class(spec.algo)(policy, env, seed=spec.seed, device="cpu", tensorboard_log=tb, **hp)
 
@@ -136,7 +155,7 @@ def run_pair(spec: RunSpec) -> list[Row]:
             for stale in (Path(spec.out_dir) / "tb").glob(f"{spec.name}_*"):
                 shutil.rmtree(stale, ignore_errors=True)
     progress.write_text("".join(f"{row['epoch']}\n" for row in state["rows"]))
-    test_env = make_test_env(spec.env_id, spec.test_episodes, spec.vec_env)
+    test_env = make_test_env(spec.env_id, spec.test_episodes, spec.vec_env, spec.env_kwargs)
     nav = NavigationMetricsCallback()
     epochs = EpochCallback(spec, test_env, nav, state)
     if state["epoch"] < spec.epochs:

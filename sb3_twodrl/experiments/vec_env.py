@@ -109,17 +109,28 @@ def _batched(env_id: str, n_envs: int, mode: str) -> bool:
     return available
 
 
-def make_train_env(env_id: str, n_envs: int, seed: int, mode: str = "auto") -> VecEnv:
-    """``n_envs`` learning envs seeded ``seed + i``: batched (``mode`` ``"auto"``/``"batched"``) or SB3's."""
+def _vector(env_id: str, n_envs: int, env_kwargs: dict[str, Any] | None) -> VecEnv:
+    venv = gym.make_vec(env_id, num_envs=n_envs, vectorization_mode="vector_entry_point", **(env_kwargs or {}))
+    return VectorEnvAdapter(venv)
+
+
+def make_train_env(
+    env_id: str, n_envs: int, seed: int, mode: str = "auto", env_kwargs: dict[str, Any] | None = None
+) -> VecEnv:
+    """``n_envs`` learning envs seeded ``seed + i``: batched (``mode`` ``"auto"``/``"batched"``) or SB3's.
+
+    ``env_kwargs`` go to the env's constructor on top of the registered ones (rl-zoo3's ``env_kwargs``).
+    """
     if _batched(env_id, n_envs, mode):
-        venv: VecEnv = VectorEnvAdapter(gym.make_vec(env_id, num_envs=n_envs, vectorization_mode="vector_entry_point"))
+        venv = _vector(env_id, n_envs, env_kwargs)
         venv.seed(seed)
         return venv
-    return make_vec_env(env_id, n_envs=n_envs, seed=seed)
+    return make_vec_env(env_id, n_envs=n_envs, seed=seed, env_kwargs=env_kwargs)
 
 
-def make_test_env(env_id: str, n_envs: int, mode: str = "auto") -> VecEnv:
+def make_test_env(env_id: str, n_envs: int, mode: str = "auto", env_kwargs: dict[str, Any] | None = None) -> VecEnv:
     """``n_envs`` test envs (no monitor), one test trial each per call of :func:`run_test_trials`."""
     if _batched(env_id, n_envs, mode):
-        return VectorEnvAdapter(gym.make_vec(env_id, num_envs=n_envs, vectorization_mode="vector_entry_point"))
-    return DummyVecEnv([lambda: gym.make(env_id)] * n_envs)
+        return _vector(env_id, n_envs, env_kwargs)
+    kwargs = env_kwargs or {}
+    return DummyVecEnv([lambda: gym.make(env_id, **kwargs)] * n_envs)

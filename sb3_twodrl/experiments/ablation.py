@@ -1,0 +1,262 @@
+"""What each part of 2D-RL contributes (issue 11), at the paper's protocol: ``sb3-twodrl-ablation``.
+
+Every arm is a grid of (arm, seed) runs of :func:`~sb3_twodrl.experiments.runner.run_pair`
+(epochs of K learning trials and M test trials, batched envs, resume), in ``<out>/<arm>/``. All arms
+share the protocol's settings (``<hyperparams-dir>/a2c.yml`` and ``twoda2c.yml``, whose Nomad entries
+differ only in the 2D-RL arguments); an arm changes only these:
+
+1. ``a2c``: SB3's A2C.
+2. ``a2c_fixed``: A2C at a fixed temperature: TwoDimA2C with ``reward_split="none"`` (the whole
+   reward in the reward stream), ``punishment_weight=0`` and no punishment critic loss, which is A2C
+   (``tests/test_equivalence.py``), with ``temperature`` set to the ``paper`` arm's mean temperature.
+3. ``twod_fixed``: TwoDimA2C (two critics, the utility) at that fixed temperature: no interest.
+4. ``paper``: TwoDimA2C, eq. 9 as the paper writes it (``interest="paper", preferences="raw"``).
+5. ``relative_bounded``, ``relative_raw``, ``learned_bounded``: the options of
+   :mod:`sb3_twodrl.common.interest`.
+
+The fixed arms run after the ``paper`` arm, whose mean temperature over all its learning steps
+(``mean_temperature`` of the rows, weighted by steps) they take unless ``--fixed-temperature`` is
+given; it is stored in ``<out>/fixed_temperature.json``.
+
+Per run (:func:`summarize_run`): final test goal rate (last epoch), learned (final goal rate >= 0.8),
+the first epoch with a goal rate >= 0.5, shortcut share and reward per step of the last epoch,
+collapse (after a goal rate >= 0.8, 3 or more consecutive epochs below 0.5), and, over all learning
+steps, the share on which the interest, not a clamp, set the temperature. Per arm (:func:`table`):
+means over seeds with 95% intervals (t over seeds; Wilson for the share of seeds that learned).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sb3_twodrl.experiments.grid import check_config, collect_results, pending, run_grid
+from sb3_twodrl.experiments.protocol import PRESETS, RunSpec, load_hyperparams
+
+ARMS: dict[str, tuple[str, dict[str, Any]]] = {
+    "a2c": ("a2c", {}),
+    "a2c_fixed": ("twoda2c", {"reward_split": "none", "punishment_weight": 0.0, "punishment_vf_coef": 0.0}),
+    "twod_fixed": ("twoda2c", {}),
+    "paper": ("twoda2c", {"interest": "paper", "preferences": "raw"}),
+    "relative_bounded": ("twoda2c", {"interest": "relative", "preferences": "bounded"}),
+    "relative_raw": ("twoda2c", {"interest": "relative", "preferences": "raw"}),
+    "learned_bounded": ("twoda2c", {"interest": "learned", "preferences": "bounded"}),
+}
+FIXED = ("a2c_fixed", "twod_fixed")
+"""Arms acting at a fixed temperature (that of the ``paper`` arm), raw preferences."""
+DEFAULT_ARMS = ("a2c", "a2c_fixed", "twod_fixed", "paper", "relative_bounded")
+METRICS = (
+    "learned",
+    "final_goal_rate",
+    "epochs_to_half",
+    "shortcut_share",
+    "reward_per_step",
+    "interest_share",
+)
+_CHECKOUT_HYPERPARAMS = Path(__file__).resolve().parents[2] / "scripts" / "hyperparams"
+
+
+def arm_hyperparams(arm: str, base: dict[str, dict[str, Any]], temperature: float | None) -> tuple[str, dict]:
+    """The algorithm name and hyperparameters of ``arm``: ``base[algo]`` with the arm's 2D settings."""
+    if arm not in ARMS:
+        raise ValueError(f"arm must be one of {sorted(ARMS)}, got {arm!r}")
+    algo, overrides = ARMS[arm]
+    hp = {**base[algo], **overrides}
+    if arm in FIXED:
+        if temperature is None or not temperature > 0:
+            raise ValueError(f"arm {arm!r} needs a positive fixed temperature, got {temperature!r}")
+        hp.update(temperature=float(temperature), preferences="raw")
+    return algo, hp
+
+
+def mean_temperature(rows: Any) -> float:
+    """Mean temperature over all learning steps of ``rows`` (a results DataFrame), weighted by steps."""
+    steps = rows.groupby("seed")["env_steps"].diff().fillna(rows["env_steps"])
+    keep = rows["mean_temperature"].notna()
+    if not keep.any():
+        raise ValueError("rows have no mean_temperature: the paper arm has not run")
+    return float(np.average(rows.loc[keep, "mean_temperature"], weights=steps[keep]))
+
+
+def summarize_run(rows: Any) -> dict[str, float]:
+    """The per-run metrics of one (arm, seed)'s rows, in epoch order."""
+    rates = rows["goal_rate"].to_numpy(dtype=float)
+    steps = np.diff(rows["env_steps"].to_numpy(dtype=float), prepend=0.0)
+    share = rows["interest_share"].to_numpy(dtype=float)
+    known = ~np.isnan(share)
+    half = np.flatnonzero(rates >= 0.5)
+    peak = np.flatnonzero(rates >= 0.8)
+    longest = run = 0
+    for below in rates[peak[0] :] < 0.5 if peak.size else []:
+        run = run + 1 if below else 0
+        longest = max(longest, run)
+    last = rows.iloc[-1]
+    return {
+        "learned": float(rates[-1] >= 0.8),
+        "final_goal_rate": float(rates[-1]),
+        "epochs_to_half": float(half[0] + 1) if half.size else math.nan,
+        "shortcut_share": float(last["shortcut_share"]),
+        "reward_per_step": float(last["reward_per_step"]),
+        "interest_share": float(np.average(share[known], weights=steps[known])) if known.any() else math.nan,
+        "collapsed": float(longest >= 3),
+    }
+
+
+def interval(values: list[float], count: bool = False) -> tuple[float, float, float, int]:
+    """Mean and 95% interval over seeds (Wilson for a share of seeds, t otherwise), NaNs left out."""
+    from scipy import stats
+
+    x = np.array([v for v in values if not math.isnan(v)], dtype=float)
+    if not x.size:
+        return math.nan, math.nan, math.nan, 0
+    mean = float(x.mean())
+    if count:
+        n, z = x.size, 1.959964
+        centre = (mean + z * z / (2 * n)) / (1 + z * z / n)
+        half = z * math.sqrt(mean * (1 - mean) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+        return mean, centre - half, centre + half, n
+    if x.size < 2:
+        return mean, math.nan, math.nan, 1
+    half = float(stats.t.ppf(0.975, x.size - 1) * x.std(ddof=1) / math.sqrt(x.size))
+    return mean, mean - half, mean + half, int(x.size)
+
+
+def summaries(out: Path, arms: list[str]) -> dict[str, list[dict[str, float]]]:
+    """Per arm, the :func:`summarize_run` of each finished seed under ``out``."""
+    result = {}
+    for arm in arms:
+        df = collect_results(out / arm)
+        result[arm] = [{"seed": seed, **summarize_run(rows)} for seed, rows in df.groupby("seed")]
+    return result
+
+
+def table(runs: dict[str, list[dict[str, float]]]) -> str:
+    """Markdown: one row per arm, each metric's mean [95% interval] (n seeds), collapses counted."""
+    lines = ["| arm | seeds | " + " | ".join(METRICS) + " | collapsed |", "|---" * (len(METRICS) + 3) + "|"]
+    for arm, mine in runs.items():
+        if not mine:
+            continue
+        cells = []
+        for key in METRICS:
+            mean, low, high, n = interval([r[key] for r in mine], count=key == "learned")
+            digits = 1 if key == "epochs_to_half" else 3 if key == "reward_per_step" else 2
+            cells.append("-" if n == 0 else f"{mean:.{digits}f} [{low:.{digits}f}, {high:.{digits}f}] (n={n})")
+        collapsed = int(sum(r["collapsed"] for r in mine))
+        lines.append(f"| {arm} | {len(mine)} | " + " | ".join(cells) + f" | {collapsed} |")
+    return "\n".join(lines)
+
+
+def figure(out: Path, runs: dict[str, list[dict[str, float]]], path: Path) -> None:
+    """Bars of the per-arm metrics with their intervals, and each arm's mean test goal rate per epoch."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    arms = [arm for arm, mine in runs.items() if mine]
+    fig, axes = plt.subplots(1, len(METRICS) + 1, figsize=(3.6 * (len(METRICS) + 1), 3.6))
+    for ax, key in zip(axes, METRICS, strict=False):
+        for i, arm in enumerate(arms):
+            mean, low, high, n = interval([r[key] for r in runs[arm]], count=key == "learned")
+            if n:
+                error = None if math.isnan(low) else [[mean - low], [high - mean]]
+                ax.bar(i, mean, yerr=error, capsize=4, color=f"C{i}")
+        ax.set_xticks(range(len(arms)), arms, rotation=40, ha="right")
+        ax.set_title(key)
+    ax = axes[-1]
+    for i, arm in enumerate(arms):
+        curve = collect_results(out / arm).groupby("epoch")["goal_rate"].mean()
+        ax.plot(curve.index, curve.to_numpy(), color=f"C{i}", label=arm)
+    ax.set_xlabel("epoch")
+    ax.set_title("test goal rate (mean over seeds)")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--env", default="NomadOffice-v0", help="Gymnasium ID (default: %(default)s)")
+    p.add_argument("--arms", nargs="+", choices=sorted(ARMS), default=list(DEFAULT_ARMS))
+    p.add_argument("--seeds", type=int, nargs="+", default=list(range(10)))
+    p.add_argument("--epochs", type=int, default=50)
+    p.add_argument("--learn-episodes", "-K", type=int, default=PRESETS["paper"]["learn_episodes"])
+    p.add_argument("--test-episodes", "-M", type=int, default=PRESETS["paper"]["test_episodes"])
+    p.add_argument("--fixed-temperature", type=float, help="default: the paper arm's measured mean temperature")
+    p.add_argument("--hyperparams-dir", default=str(_CHECKOUT_HYPERPARAMS), help="folder of a2c.yml, twoda2c.yml")
+    p.add_argument("--checkpoint-every", type=int, default=10, help="epochs between checkpoints (0: none)")
+    p.add_argument("--out", type=Path, default=Path("runs") / "ablation")
+    p.add_argument("--backend", choices=("process", "ray", "serial"), default="process")
+    p.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    p.add_argument("--gym-packages", nargs="*", default=["envs"], help="modules that register the env")
+    return p.parse_args(argv)
+
+
+def _run_arms(args: argparse.Namespace, arms: list[str], base: dict, temperature: float | None) -> None:
+    specs = []
+    for arm in arms:
+        algo, hp = arm_hyperparams(arm, base, temperature)
+        out = args.out / arm
+        config = {
+            "env_id": args.env,
+            "epochs": args.epochs,
+            "learn_episodes": args.learn_episodes,
+            "test_episodes": args.test_episodes,
+            "vec_env": "auto",
+            "hyperparams": {algo: {k: repr(v) for k, v in hp.items()}},
+        }
+        check_config(out, config)
+        specs += [
+            RunSpec(
+                env_id=args.env,
+                algo=algo,
+                seed=seed,
+                epochs=args.epochs,
+                learn_episodes=args.learn_episodes,
+                test_episodes=args.test_episodes,
+                hyperparams=hp,
+                out_dir=str(out),
+                gym_packages=list(args.gym_packages),
+                checkpoint_every=args.checkpoint_every,
+                tensorboard=False,
+            )
+            for seed in args.seeds
+        ]
+    run_grid(pending(specs), args.backend, args.workers)
+
+
+def ablation(argv: list[str] | None = None) -> dict[str, list[dict[str, float]]]:
+    """Run (or resume) the arms of ``argv``; write ``table.md`` and ``ablation.png``; the per-run summaries."""
+    args = parse_args(argv)
+    for package in args.gym_packages:
+        importlib.import_module(package)
+    directory = Path(args.hyperparams_dir)
+    base = {algo: load_hyperparams(directory / f"{algo}.yml", args.env) for algo in ("a2c", "twoda2c")}
+    free = [arm for arm in args.arms if arm not in FIXED]
+    fixed = [arm for arm in args.arms if arm in FIXED]
+    _run_arms(args, free, base, None)
+    if fixed:
+        temperature = args.fixed_temperature
+        if temperature is None:
+            temperature = mean_temperature(collect_results(args.out / "paper"))
+        (args.out / "fixed_temperature.json").write_text(json.dumps({"temperature": temperature}))
+        _run_arms(args, fixed, base, temperature)
+    runs = summaries(args.out, list(args.arms))
+    text = table(runs)
+    (args.out / "table.md").write_text(text + "\n")
+    (args.out / "runs.json").write_text(json.dumps(runs, indent=1))
+    figure(args.out, runs, args.out / "ablation.png")
+    print(text)
+    return runs
+
+
+def main(argv: list[str] | None = None) -> None:
+    ablation(argv)
