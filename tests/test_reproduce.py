@@ -96,3 +96,14 @@ def test_ray_backend_gives_the_process_rows(process_run, tmp_path):
     process_rows = without_wall(pd.read_csv(process_run / "results.csv"))
     process_rows = process_rows[(process_rows["algo"] == "twoda2c") & (process_rows["seed"] == int(SEEDS[-1]))]
     pd.testing.assert_frame_equal(ray_rows, process_rows.reset_index(drop=True))
+
+
+def test_env_kwargs_reach_the_envs_and_guard_resume(tmp_path):
+    base = ["--env", "NomadOffice-v0", "--preset", "tiny", "--n-envs", "2", "--seed-list", "0", "--algos", "a2c"]
+    base += ["--no-progress", "--no-plots", "--backend", "serial", "--out", str(tmp_path)]
+    reproduce.reproduce([*base, "--env-kwargs", "observe_odometry:False"])
+    model = algo_class("a2c").load(tmp_path / "models" / "a2c_seed0.zip")
+    assert model.observation_space.shape == (32,)  # 16 sonar + 16 infrared, no odometry
+    assert json.loads((tmp_path / "config.json").read_text())["env_kwargs"] == {"observe_odometry": False}
+    with pytest.raises(ValueError, match="env_kwargs"):
+        reproduce.reproduce(base)

@@ -211,6 +211,7 @@ def _run_arms(args: argparse.Namespace, arms: list[str], base: dict, temperature
             "learn_episodes": args.learn_episodes,
             "test_episodes": args.test_episodes,
             "vec_env": "auto",
+            "env_kwargs": {},
             "hyperparams": {algo: {k: repr(v) for k, v in hp.items()}},
         }
         check_config(out, config)

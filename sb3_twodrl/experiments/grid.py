@@ -52,15 +52,15 @@ def collect_results(out_dir: str | Path):
 def check_config(out_dir: str | Path, config: dict[str, Any]) -> None:
     """Refuse to resume ``out_dir`` under another protocol; algos and seeds may be added.
 
-    ``config`` has ``env_id``, ``epochs``, ``learn_episodes``, ``test_episodes``, ``vec_env`` and
-    ``hyperparams`` (per algo); the algos of an earlier invocation stay in the stored config.
+    ``config`` has ``env_id``, ``epochs``, ``learn_episodes``, ``test_episodes``, ``vec_env``,
+    ``env_kwargs`` and ``hyperparams`` (per algo); the algos of an earlier invocation stay in the stored config.
     """
     path = Path(out_dir) / "config.json"
     if path.exists():
         old = json.loads(path.read_text())
         old_hp = old.get("hyperparams", {})
-        keys = ("env_id", "epochs", "learn_episodes", "test_episodes", "vec_env")
-        diff = [k for k in keys if old.get(k) != config.get(k)]
+        keys = ("env_id", "epochs", "learn_episodes", "test_episodes", "vec_env", "env_kwargs")
+        diff = [k for k in keys if old.get(k, {} if k == "env_kwargs" else None) != config.get(k)]
         diff += [
             f"hyperparams of {a}"
             for a in sorted(old_hp.keys() & config["hyperparams"].keys())

@@ -99,6 +99,22 @@ def load_hyperparams(path: str | Path, env_id: str, fallback_env_id: str = "Noma
     return entry
 
 
+def parse_env_kwargs(items: list[str] | None) -> dict[str, Any]:
+    """``["key:value", ...]`` (rl-zoo3's ``--env-kwargs`` format, values as Python literals) as a dict."""
+    import ast
+
+    out: dict[str, Any] = {}
+    for item in items or []:
+        key, sep, value = item.partition(":")
+        try:
+            if not (sep and key.isidentifier()):
+                raise ValueError
+            out[key] = ast.literal_eval(value)
+        except (ValueError, SyntaxError):
+            raise ValueError(f"env_kwargs items must be key:value with a Python literal value, got {item!r}") from None
+    return out
+
+
 def trial_seed(seed: int, epoch: int) -> int:
     """Seed of epoch ``epoch``'s test trials: disjoint from the learning seeds (which are < 10**6)."""
     return 10**6 + 1_000 * (seed % 10**6) + epoch

@@ -23,7 +23,7 @@ from pathlib import Path
 
 from sb3_twodrl.experiments.algos import ALGOS
 from sb3_twodrl.experiments.grid import BACKENDS, check_config, collect_results, pending, run_grid
-from sb3_twodrl.experiments.protocol import PRESETS, RunSpec, load_hyperparams
+from sb3_twodrl.experiments.protocol import PRESETS, RunSpec, load_hyperparams, parse_env_kwargs
 from sb3_twodrl.experiments.vec_env import VEC_ENV_MODES
 
 _CHECKOUT_HYPERPARAMS = Path(__file__).resolve().parents[2] / "scripts" / "hyperparams"
@@ -41,6 +41,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--algos", nargs="+", default=["twoda2c", "a2c"], choices=sorted(ALGOS))
     p.add_argument("--n-envs", type=int, help="parallel learning envs (default: the hyperparams file's n_envs)")
     p.add_argument("--hyperparams-dir", default=str(_CHECKOUT_HYPERPARAMS), help="folder of <algo>.yml")
+    p.add_argument("--env-kwargs", nargs="*", metavar="KEY:VALUE", help="env arguments, e.g. observe_odometry:False")
     p.add_argument("--vec-env", choices=VEC_ENV_MODES, default="auto", help="batched env or DummyVecEnv")
     p.add_argument("--checkpoint-every", type=int, default=10, help="epochs between checkpoints (0: none)")
     p.add_argument("--no-models", action="store_true", help="do not save the final models")
@@ -63,6 +64,7 @@ def specs_from_args(args: argparse.Namespace) -> tuple[list[RunSpec], Path, dict
     m = args.test_episodes or preset["test_episodes"]
     seeds = args.seed_list if args.seed_list else list(range(args.seeds or preset["seeds"]))
     out = Path(args.out or Path("runs") / "reproduce" / args.env)
+    env_kwargs = parse_env_kwargs(args.env_kwargs)
     hyperparams = {a: load_hyperparams(Path(args.hyperparams_dir) / f"{a}.yml", args.env) for a in args.algos}
     if args.n_envs:
         for hp in hyperparams.values():
@@ -73,6 +75,7 @@ def specs_from_args(args: argparse.Namespace) -> tuple[list[RunSpec], Path, dict
         "learn_episodes": k,
         "test_episodes": m,
         "vec_env": args.vec_env,
+        "env_kwargs": env_kwargs,
         "hyperparams": {a: {key: repr(v) for key, v in hp.items()} for a, hp in hyperparams.items()},
     }
     specs = [
@@ -90,6 +93,7 @@ def specs_from_args(args: argparse.Namespace) -> tuple[list[RunSpec], Path, dict
             checkpoint_every=args.checkpoint_every,
             save_model=not args.no_models,
             tensorboard=not args.no_tensorboard,
+            env_kwargs=env_kwargs,
         )
         for a in args.algos
         for s in seeds

@@ -45,25 +45,43 @@ def run_test_trials(model: BaseAlgorithm, test_env: VecEnv, seed: int, determini
     return summarize_episodes(r for r in records if r is not None)
 
 
-def count_outcomes(model: BaseAlgorithm, test_env: VecEnv, seed: int, deterministic: bool = True) -> dict[str, Any]:
-    """Successes, shortcut successes, collisions and time-outs of one trial per sub-env (transfer tables)."""
+def trial_outcomes(model: BaseAlgorithm, test_env: VecEnv, seed: int, deterministic: bool = True) -> list[str]:
+    """The outcome of one trial per sub-env of ``test_env``, in sub-env order (sub-env ``i`` seeded ``seed + i``).
+
+    ``"shortcut"`` or ``"detour"`` (the goal, by that route), ``"goal"`` (the goal, no route label),
+    ``"collision"`` or ``"timeout"``.
+    """
     n = test_env.num_envs
     with th.random.fork_rng(devices=[]):
         th.manual_seed(seed)
         test_env.seed(seed)
         obs = test_env.reset()
-        outcome: list[dict[str, Any] | None] = [None] * n
-        while any(o is None for o in outcome):
+        ends: list[dict[str, Any] | None] = [None] * n
+        while any(o is None for o in ends):
             actions, _ = model.predict(obs, deterministic=deterministic)
             obs, _, dones, infos = test_env.step(actions)
             for i in np.flatnonzero(dones):
-                if outcome[i] is None:
-                    outcome[i] = infos[i]
-    done = [o for o in outcome if o is not None]
-    success = [bool(o.get("is_success")) for o in done]
+                if ends[i] is None:
+                    ends[i] = infos[i]
+    outcomes = []
+    for info in ends:  # every trial has ended
+        if info.get("is_success"):
+            outcomes.append(info["route"] if info.get("route") in ("shortcut", "detour") else "goal")
+        else:
+            outcomes.append("collision" if info.get("collision") else "timeout")
+    return outcomes
+
+
+def count_outcomes(model: BaseAlgorithm, test_env: VecEnv, seed: int, deterministic: bool = True) -> dict[str, Any]:
+    """Successes, shortcut successes, collisions and time-outs of :func:`trial_outcomes` (transfer tables)."""
+    return tally(trial_outcomes(model, test_env, seed, deterministic))
+
+
+def tally(outcomes: list[str]) -> dict[str, int]:
+    """Counts of successes, shortcut successes, collisions and time-outs among ``outcomes``."""
     return {
-        "success": sum(success),
-        "shortcut": sum(s and o.get("route") == "shortcut" for s, o in zip(success, done, strict=True)),
-        "collision": sum(not s and bool(o.get("collision")) for s, o in zip(success, done, strict=True)),
-        "timeout": sum(not s and not o.get("collision") for s, o in zip(success, done, strict=True)),
+        "success": sum(o in ("shortcut", "detour", "goal") for o in outcomes),
+        "shortcut": outcomes.count("shortcut"),
+        "collision": outcomes.count("collision"),
+        "timeout": outcomes.count("timeout"),
     }
