@@ -1,0 +1,33 @@
+"""sb3_twodrl.experiments.non_regression: rl-zoo3 training, frozen VecNormalize evaluation, table, resume."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+pytest.importorskip("rl_zoo3")
+pytest.importorskip("scipy")
+
+from sb3_twodrl.experiments.non_regression import non_regression, parse_args
+
+
+def test_tiny_pendulum_check_evaluates_every_seed_and_resumes(tmp_path) -> None:
+    argv = ["--env", "Pendulum-v1", "--seeds", "0", "1", "--n-timesteps", "128", "--episodes", "1"]
+    argv += ["--out", str(tmp_path), "--workers", "2"]
+    returns = non_regression(argv)
+    assert sorted(returns) == ["a2c", "twoda2c"]
+    assert all(len(v) == 2 and all(math.isfinite(x) and x < 0 for x in v) for v in returns.values())
+    run = tmp_path / "Pendulum-v1" / "twoda2c_seed0" / "twoda2c" / "Pendulum-v1_1"
+    assert (run / "Pendulum-v1" / "vecnormalize.pkl").exists()  # the entry normalises: stats saved and used
+    stamp = (run / "Pendulum-v1.zip").stat().st_mtime_ns
+    assert non_regression(argv) == returns and (run / "Pendulum-v1.zip").stat().st_mtime_ns == stamp
+    stored = json.loads((tmp_path / "Pendulum-v1" / "returns.json").read_text())
+    assert stored["twoda2c_seed1"] == returns["twoda2c"][1]
+    assert "minus a2c" in (tmp_path / "Pendulum-v1" / "table.md").read_text()
+
+
+def test_one_seed_is_refused() -> None:
+    with pytest.raises(ValueError, match="seeds"):
+        parse_args(["--env", "CartPole-v1", "--seeds", "0"])
