@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 
 from sb3_twodrl.experiments.grid import check_config, collect_results, pending, run_grid
+from sb3_twodrl.experiments.intervals import mean_ci, wilson
 from sb3_twodrl.experiments.protocol import PRESETS, RunSpec, load_hyperparams
 
 ARMS: dict[str, tuple[str, dict[str, Any]]] = {
@@ -111,21 +112,10 @@ def summarize_run(rows: Any) -> dict[str, float]:
 
 def interval(values: list[float], count: bool = False) -> tuple[float, float, float, int]:
     """Mean and 95% interval over seeds (Wilson for a share of seeds, t otherwise), NaNs left out."""
-    from scipy import stats
-
-    x = np.array([v for v in values if not math.isnan(v)], dtype=float)
-    if not x.size:
-        return math.nan, math.nan, math.nan, 0
-    mean = float(x.mean())
-    if count:
-        n, z = x.size, 1.959964
-        centre = (mean + z * z / (2 * n)) / (1 + z * z / n)
-        half = z * math.sqrt(mean * (1 - mean) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-        return mean, centre - half, centre + half, n
-    if x.size < 2:
-        return mean, math.nan, math.nan, 1
-    half = float(stats.t.ppf(0.975, x.size - 1) * x.std(ddof=1) / math.sqrt(x.size))
-    return mean, mean - half, mean + half, int(x.size)
+    mean, half, n = mean_ci(values)
+    if count and n:
+        return (mean, *wilson(round(mean * n), n), n)
+    return mean, mean - half, mean + half, n
 
 
 def summaries(out: Path, arms: list[str]) -> dict[str, list[dict[str, float]]]:

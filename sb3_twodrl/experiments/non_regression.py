@@ -14,12 +14,11 @@ from __future__ import annotations
 import argparse
 import concurrent.futures as cf
 import json
-import math
 import multiprocessing as mp
 import os
 from pathlib import Path
 
-import numpy as np
+from sb3_twodrl.experiments.intervals import mean_ci, welch_ci
 
 _CHECKOUT_HYPERPARAMS = Path(__file__).resolve().parents[2] / "scripts" / "hyperparams"
 EVAL_SEED = 10**6
@@ -60,33 +59,18 @@ def train_and_evaluate(
     return float(mean)
 
 
-def t_interval(x: np.ndarray) -> tuple[float, float]:
-    """95% t-interval of the mean of ``x``."""
-    from scipy import stats
-
-    half = stats.t.ppf(0.975, x.size - 1) * x.std(ddof=1) / math.sqrt(x.size)
-    return float(x.mean() - half), float(x.mean() + half)
-
-
 def table(env_id: str, returns: dict[str, list[float]]) -> str:
     """Markdown: per algo the returns per seed, the mean [95% t-interval] and the Welch interval of the difference."""
-    from scipy import stats
-
     base_algo, base = next(iter(returns.items()))
     lines = [f"| {env_id} | per seed | mean [95% CI] | minus {base_algo} [95% Welch CI] |", "|---|---|---|---|"]
     for algo, values in returns.items():
-        x = np.asarray(values)
-        low, high = t_interval(x)
+        mean, half, _ = mean_ci(values)
         diff = "-"
         if algo != base_algo:
-            b = np.asarray(base)
-            va, vb = x.var(ddof=1) / x.size, b.var(ddof=1) / b.size
-            dof = (va + vb) ** 2 / (va**2 / (x.size - 1) + vb**2 / (b.size - 1))
-            half = stats.t.ppf(0.975, dof) * math.sqrt(va + vb)
-            d = x.mean() - b.mean()
-            diff = f"{d:+.1f} [{d - half:+.1f}, {d + half:+.1f}]"
+            d, h = welch_ci(values, base)
+            diff = f"{d:+.1f} [{d - h:+.1f}, {d + h:+.1f}]"
         cells = ", ".join(f"{v:.1f}" for v in values)
-        lines.append(f"| {algo} | {cells} | {x.mean():.1f} [{low:.1f}, {high:.1f}] | {diff} |")
+        lines.append(f"| {algo} | {cells} | {mean:.1f} [{mean - half:.1f}, {mean + half:.1f}] | {diff} |")
     return "\n".join(lines)
 
 

@@ -9,12 +9,12 @@ to a route, is left out of that epoch's share).
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from scipy import stats
+
+from sb3_twodrl.experiments.intervals import mean_ci
 
 STYLE = {  # the paper: proposed method solid, conventional actor-critic dotted
     "twoda2c": {"label": "2D-RL (TwoDimA2C)", "linestyle": "-", "color": "tab:red"},
@@ -26,23 +26,6 @@ FIGURES = [
     ("fig4_reward_per_step.png", "reward_per_step", "reward per step (test)", None),
     ("fig5_route_share.png", "shortcut_share", "shortcut share of routed test episodes", (0.0, 1.0)),
 ]
-
-
-def t_quantile(n: int) -> float:
-    """Two-sided 95% Student t quantile with n - 1 degrees of freedom."""
-    if n < 2:
-        return math.nan
-    return float(stats.t.ppf(0.975, n - 1))
-
-
-def mean_ci(values) -> tuple[float, float, int]:
-    """Mean and the half-width of its 95% interval over the finite values."""
-    v = np.asarray([x for x in values if np.isfinite(x)], dtype=float)
-    if v.size == 0:
-        return math.nan, math.nan, 0
-    if v.size == 1:
-        return float(v[0]), math.nan, 1
-    return float(v.mean()), float(t_quantile(v.size) * v.std(ddof=1) / math.sqrt(v.size)), int(v.size)
 
 
 def curves(df: pd.DataFrame, metric: str) -> dict[str, pd.DataFrame]:

@@ -17,17 +17,16 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
-import math
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import torch as th
 from stable_baselines3.common.base_class import BaseAlgorithm
 
 from sb3_twodrl.experiments.algos import ALGOS, algo_class
+from sb3_twodrl.experiments.intervals import mean_ci, wilson
 from sb3_twodrl.experiments.protocol import parse_env_kwargs
 from sb3_twodrl.experiments.runner import model_path
 from sb3_twodrl.experiments.trials import tally, trial_outcomes
@@ -54,25 +53,10 @@ class TransferRow:
     train_seconds: list[float] = field(default_factory=list)
 
 
-def wilson(k: int, n: int, z: float = 1.959964) -> tuple[float, float]:
-    """95 % Wilson score interval of a proportion k / n."""
-    if n == 0:
-        return (0.0, 1.0)
-    p = k / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return (max(0.0, centre - half), min(1.0, centre + half))
-
-
 def over_seeds(values: list[float]) -> str:
     """``mean [low, high]``: the mean over seeds with its 95% t-interval."""
-    from scipy import stats
-
-    x = np.asarray(values, dtype=float)
-    if x.size < 2:
-        return f"{x.mean():.2f}" if x.size else "-"
-    half = stats.t.ppf(0.975, x.size - 1) * x.std(ddof=1) / math.sqrt(x.size)
-    return f"{x.mean():.2f} [{x.mean() - half:.2f}, {x.mean() + half:.2f}]"
+    mean, half, n = mean_ci(values)
+    return "-" if n == 0 else f"{mean:.2f}" if n == 1 else f"{mean:.2f} [{mean - half:.2f}, {mean + half:.2f}]"
 
 
 def train_policy(
