@@ -144,3 +144,22 @@ def test_paper_mode_freezes_on_a_collapsed_policy() -> None:
 def test_bad_interest_settings_are_rejected(kwargs: dict[str, Any], match: str) -> None:
     with pytest.raises(ValueError, match=match):
         TwoDimA2C("MlpPolicy", LatticeCorridor(), **kwargs)
+
+
+@pytest.mark.parametrize("bound", [0.5, 2.5])
+def test_the_preference_bound_is_the_largest_spread_and_is_saved(bound: float, tmp_path) -> None:
+    """``preference_bound`` sets the sd over the actions of the bounded preferences; it travels with the model."""
+    model = collapsed_model(interest="relative", preferences="bounded", preference_bound=bound)
+    obs = th.as_tensor(np.eye(18, dtype=np.float32))
+    with th.no_grad():
+        dist = model.policy.tempered_distribution(model.policy._actor_latent(obs), np.ones(18, np.float32))
+    spread = dist.distribution.logits.std(dim=1, unbiased=False)  # log-probabilities: the logits shifted
+    assert th.allclose(spread, th.full_like(spread, bound), atol=1e-4)
+    model.save(tmp_path / "m.zip")
+    assert TwoDimA2C.load(tmp_path / "m.zip").policy.preference_bound == bound
+
+
+@pytest.mark.parametrize("bound", [0, -1.0, float("inf")])
+def test_a_bad_preference_bound_is_named(bound: float) -> None:
+    with pytest.raises(ValueError, match="preference_bound"):
+        TwoDimA2C("MlpPolicy", LatticeCorridor(), preferences="bounded", preference_bound=bound)

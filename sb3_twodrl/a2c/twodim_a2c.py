@@ -47,7 +47,9 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
         transition into the state), ``"relative"`` (``delta+`` over its running mean) or ``"learned"``
         (a head's ``E[delta+ | s]`` over the running mean of ``delta+``)
     :param preferences: ``"raw"`` (eq. 9 literally) or ``"bounded"`` (preferences divided by
-        ``max(1, their sd over the actions)``, so that ``min_temperature`` bounds how greedy actions get)
+        ``max(1, their sd over the actions / preference_bound)``, so that ``min_temperature`` bounds how
+        greedy actions get)
+    :param preference_bound: the largest sd over the actions of ``"bounded"`` preferences
     :param interest_coef: loss weight of the ``"learned"`` mode's interest head (its target is ``delta+``)
     :param min_temperature: floor of the interest temperature; keeps the policy from freezing
         into argmax once the critics settle and the interest collapses toward 0
@@ -96,6 +98,7 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
         max_temperature: float = 10.0,
         interest: str = "paper",
         preferences: str = "raw",
+        preference_bound: float = 1.0,
         interest_coef: float = 0.5,
         _init_setup_model: bool = True,
     ):
@@ -116,6 +119,7 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
             max_temperature=max_temperature,
             interest=interest,
             preferences=preferences,
+            preference_bound=preference_bound,
             interest_coef=interest_coef,
         )
         super().__init__(

@@ -22,12 +22,12 @@ how eq. 9 keeps its meaning (README, "Design notes"):
 ``preferences`` (what ``T`` divides, categorical actions only):
 
 - ``"raw"``: the actor's outputs (eq. 9 literally).
-- ``"bounded"``: the actor's outputs divided by ``max(1, sd_a p(s, .))``: preferences whose spread
-  over the actions is at most 1. A temperature then has a fixed meaning however large the actor's
-  outputs grow, and the clamp ``min_temperature`` bounds how deterministic the behaviour can get:
-  no action's probability drops below a fixed share, so a failure the critics have come to predict
-  (``delta+ = 0``, utility 0) is still tried against its alternatives. A Gaussian's mean is not a
-  preference; its std is multiplied by ``T`` in every mode.
+- ``"bounded"``: the actor's outputs divided by ``max(1, sd_a p(s, .) / B)``: preferences whose
+  spread over the actions is at most ``B`` (``preference_bound``, default 1). A temperature then has
+  a fixed meaning however large the actor's outputs grow, and the clamp ``min_temperature`` bounds
+  how deterministic the behaviour can get: no action's probability drops below a fixed share, so a
+  failure the critics have come to predict (``delta+ = 0``, utility 0) is still tried against its
+  alternatives. A Gaussian's mean is not a preference; its std is multiplied by ``T`` in every mode.
 """
 
 import numpy as np
@@ -40,7 +40,7 @@ INTEREST_SCALE_RATE = 0.01
 """Weight of each step's mean interest in the running scale of the ``"relative"`` and ``"learned"`` modes."""
 
 PREFERENCE_BOUND = 1.0
-"""Largest standard deviation over the actions of the ``"bounded"`` preferences."""
+"""Default largest standard deviation over the actions of the ``"bounded"`` preferences (``preference_bound``)."""
 
 
 def check_interest_modes(interest: str, preferences: str) -> None:
@@ -67,7 +67,7 @@ def updated_scale(scale: float, interest: np.ndarray, dones: np.ndarray) -> floa
     return mean if scale == 0.0 else scale + INTEREST_SCALE_RATE * (mean - scale)
 
 
-def bounded_preferences(logits: th.Tensor) -> th.Tensor:
-    """Preferences divided by ``max(1, sd over actions)``: their spread is at most :data:`PREFERENCE_BOUND`."""
+def bounded_preferences(logits: th.Tensor, bound: float = PREFERENCE_BOUND) -> th.Tensor:
+    """Preferences divided by ``max(1, sd over actions / bound)``: their spread is at most ``bound``."""
     spread = logits.std(dim=-1, unbiased=False, keepdim=True)
-    return logits / th.clamp(spread / PREFERENCE_BOUND, min=1.0)
+    return logits / th.clamp(spread / bound, min=1.0)

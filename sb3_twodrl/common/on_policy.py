@@ -24,7 +24,12 @@ from sb3_twodrl.common.interest import check_interest_modes
 from sb3_twodrl.common.policies import TwoDimPolicyMixin, check_temperature, two_dim_policy_class
 from sb3_twodrl.common.splitting import RewardSplit, make_reward_split, split_rewards
 from sb3_twodrl.common.utils import fast_explained_variance, fast_mean, flat
-from sb3_twodrl.common.validation import check_non_negative, check_positive_int, check_unit_interval
+from sb3_twodrl.common.validation import (
+    check_non_negative,
+    check_positive,
+    check_positive_int,
+    check_unit_interval,
+)
 
 
 class TwoDimOnPolicyMixin:
@@ -72,6 +77,7 @@ class TwoDimOnPolicyMixin:
         max_temperature: float,
         interest: str,
         preferences: str,
+        preference_bound: float,
         interest_coef: float,
     ) -> str | type[BasePolicy]:
         """Validate and store the 2D-RL arguments; returns the policy, a class made 2D (eq. 3-9) if needed."""
@@ -87,6 +93,7 @@ class TwoDimOnPolicyMixin:
         make_reward_split(reward_split)  # validates
         check_temperature(temperature, min_temperature, max_temperature)
         check_interest_modes(interest, preferences)
+        check_positive("preference_bound", preference_bound)
         check_non_negative("interest_coef", interest_coef)
         self.punishment_gamma = punishment_gamma
         self.punishment_gae_lambda = gae_lambda if punishment_gae_lambda is None else punishment_gae_lambda
@@ -98,6 +105,7 @@ class TwoDimOnPolicyMixin:
         self.max_temperature = max_temperature
         self.interest = interest
         self.preferences = preferences
+        self.preference_bound = preference_bound
         self.interest_coef = interest_coef
         self._carried_interest: tuple[Any, np.ndarray] | None = None
         return policy if isinstance(policy, str) else two_dim_policy_class(policy)
@@ -123,7 +131,12 @@ class TwoDimOnPolicyMixin:
         if self.interest == "learned":
             self.policy.add_interest_head()
         self.policy.set_temperature(
-            self.temperature, self.min_temperature, self.max_temperature, self.interest, self.preferences
+            self.temperature,
+            self.min_temperature,
+            self.max_temperature,
+            self.interest,
+            self.preferences,
+            self.preference_bound,
         )
 
     def _excluded_save_params(self) -> list[str]:

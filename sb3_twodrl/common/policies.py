@@ -26,8 +26,14 @@ from stable_baselines3.common.torch_layers import CombinedExtractor, NatureCNN
 from stable_baselines3.common.type_aliases import PyTorchObs
 from torch import nn
 
-from sb3_twodrl.common.interest import bounded_preferences, check_interest_modes, relative_interest, updated_scale
-from sb3_twodrl.common.validation import is_real
+from sb3_twodrl.common.interest import (
+    PREFERENCE_BOUND,
+    bounded_preferences,
+    check_interest_modes,
+    relative_interest,
+    updated_scale,
+)
+from sb3_twodrl.common.validation import check_positive, is_real
 
 INTEREST_EMA_RATE = 0.1
 """Weight of the newest rollout's mean interest in the ``"paper"`` mode's running estimate used by ``predict``."""
@@ -101,11 +107,13 @@ class TwoDimPolicyMixin:
         max_temperature: float,
         interest: str = "paper",
         preferences: str = "raw",
+        preference_bound: float = PREFERENCE_BOUND,
     ) -> None:
         """Set how the interest becomes the temperature of eq. 9 (the algorithm's arguments;
-        ``interest`` and ``preferences``: :mod:`sb3_twodrl.common.interest`)."""
+        ``interest``, ``preferences`` and ``preference_bound``: :mod:`sb3_twodrl.common.interest`)."""
         check_temperature(temperature, min_temperature, max_temperature)
         check_interest_modes(interest, preferences)
+        check_positive("preference_bound", preference_bound)
         if interest == "learned" and getattr(self, "interest_net", None) is None:
             raise ValueError('interest="learned" needs the interest head: call add_interest_head() first')
         self.temperature = temperature
@@ -113,6 +121,7 @@ class TwoDimPolicyMixin:
         self.max_temperature = max_temperature
         self.interest = interest
         self.preferences = preferences
+        self.preference_bound = preference_bound
 
     def add_interest_head(self) -> None:
         """Add the ``"learned"`` mode's head ``I(s)`` (estimate of ``E[delta+ | s]``) and give it to the optimizer."""
@@ -206,7 +215,7 @@ class TwoDimPolicyMixin:
         if isinstance(self.action_dist, DiagGaussianDistribution):
             return self.action_dist.proba_distribution(mean_actions, self.log_std - th.log(inverse))
         if self.preferences == "bounded":
-            mean_actions = bounded_preferences(mean_actions)
+            mean_actions = bounded_preferences(mean_actions, self.preference_bound)
         return self.action_dist.proba_distribution(action_logits=mean_actions * inverse)  # type: ignore[call-arg]
 
     def update_interest_scale(self, interest: np.ndarray, dones: np.ndarray) -> None:

@@ -31,6 +31,13 @@ def check_non_negative(name: str, value: Any) -> None:
         raise ValueError(f"{name} must be finite and >= 0, got {value!r}")
 
 
+def check_positive(name: str, value: Any) -> None:
+    """``TypeError`` unless a real number, ``ValueError`` unless finite and > 0."""
+    check_real(name, value)
+    if not (math.isfinite(value) and value > 0.0):
+        raise ValueError(f"{name} must be finite and > 0, got {value!r}")
+
+
 def check_positive_int(name: str, value: Any) -> None:
     """``TypeError`` unless an integer (not a bool), ``ValueError`` unless >= 1."""
     if not isinstance(value, (int, np.integer)) or isinstance(value, bool):

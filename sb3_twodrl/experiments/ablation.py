@@ -12,7 +12,8 @@ differ only in the 2D-RL arguments); an arm changes only these:
 3. ``twod_fixed``: TwoDimA2C (two critics, the utility) at that fixed temperature: no interest.
 4. ``paper``: TwoDimA2C, eq. 9 as the paper writes it (``interest="paper", preferences="raw"``).
 5. ``relative_bounded``, ``relative_raw``, ``learned_bounded``: the options of
-   :mod:`sb3_twodrl.common.interest`.
+   :mod:`sb3_twodrl.common.interest`; ``relative_bound25``: the relative interest on preferences
+   bounded to an sd of 2.5 with the floor at 1 (exploratory, derived in ``docs/ablation.md``).
 
 The fixed arms run after the ``paper`` arm, whose mean temperature over all its learning steps
 (``mean_temperature`` of the rows, weighted by steps) they take unless ``--fixed-temperature`` is
@@ -49,6 +50,10 @@ ARMS: dict[str, tuple[str, dict[str, Any]]] = {
     "relative_bounded": ("twoda2c", {"interest": "relative", "preferences": "bounded"}),
     "relative_raw": ("twoda2c", {"interest": "relative", "preferences": "raw"}),
     "learned_bounded": ("twoda2c", {"interest": "learned", "preferences": "bounded"}),
+    "relative_bound25": (
+        "twoda2c",
+        {"interest": "relative", "preferences": "bounded", "preference_bound": 2.5, "min_temperature": 1.0},
+    ),
 }
 FIXED = ("a2c_fixed", "twod_fixed")
 """Arms acting at a fixed temperature (that of the ``paper`` arm), raw preferences."""

@@ -53,6 +53,7 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
     :param temperature: ``"interest"`` (eq. 9, ``T`` set by the interest) or a fixed positive temperature
     :param interest: how the interest sets ``T``: ``"paper"``, ``"relative"`` or ``"learned"`` (as ``TwoDimA2C``)
     :param preferences: ``"raw"`` or ``"bounded"`` preferences (as ``TwoDimA2C``)
+    :param preference_bound: the largest sd over the actions of ``"bounded"`` preferences
     :param interest_coef: loss weight of the ``"learned"`` mode's interest head
     :param min_temperature: floor of the interest temperature
     :param max_temperature: ceiling of the interest temperature
@@ -103,6 +104,7 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
         max_temperature: float = 10.0,
         interest: str = "paper",
         preferences: str = "raw",
+        preference_bound: float = 1.0,
         interest_coef: float = 0.5,
         _init_setup_model: bool = True,
     ):
@@ -123,6 +125,7 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
             max_temperature=max_temperature,
             interest=interest,
             preferences=preferences,
+            preference_bound=preference_bound,
             interest_coef=interest_coef,
         )
         super().__init__(
