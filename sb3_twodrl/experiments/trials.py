@@ -72,13 +72,8 @@ def trial_outcomes(model: BaseAlgorithm, test_env: VecEnv, seed: int, determinis
     return outcomes
 
 
-def count_outcomes(model: BaseAlgorithm, test_env: VecEnv, seed: int, deterministic: bool = True) -> dict[str, Any]:
-    """Successes, shortcut successes, collisions and time-outs of :func:`trial_outcomes` (transfer tables)."""
-    return tally(trial_outcomes(model, test_env, seed, deterministic))
-
-
 def tally(outcomes: list[str]) -> dict[str, int]:
-    """Counts of successes, shortcut successes, collisions and time-outs among ``outcomes``."""
+    """Counts of successes, shortcut successes, collisions and time-outs among ``outcomes`` (transfer tables)."""
     return {
         "success": sum(o in ("shortcut", "detour", "goal") for o in outcomes),
         "shortcut": outcomes.count("shortcut"),
