@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from envs.memorable.database import default_database_path, load_database
@@ -37,6 +37,8 @@ def reference_split(mode: str, reward: float, info: dict[str, Any]) -> tuple[flo
         return reward + info["punishment"], info["punishment"]
     if mode == "cost":
         return reward, info["cost"]
+    if mode == "none":
+        return reward, 0.0
     return max(reward, 0.0), max(reward, 0.0) - reward
 
 
@@ -46,6 +48,7 @@ def reference_split(mode: str, reward: float, info: dict[str, Any]) -> tuple[flo
     mode=st.sampled_from(SPLIT_MODES),
     batch=st.lists(st.tuples(any_float, info_dict), min_size=1, max_size=6),
 )
+@example(mode="none", batch=[(-1.0, {})])  # found by hypothesis: "none" keeps a negative reward in r_R
 def test_reward_split_is_the_definition_or_a_clear_error(mode: str, batch: list) -> None:
     rewards = np.array([reward for reward, _ in batch])
     infos = [info for _, info in batch]
