@@ -123,13 +123,11 @@ def interval(values: list[float], count: bool = False) -> tuple[float, float, fl
     return mean, mean - half, mean + half, n
 
 
-def summaries(out: Path, arms: list[str]) -> dict[str, list[dict[str, float]]]:
-    """Per arm, the :func:`summarize_run` of each finished seed under ``out``."""
-    result = {}
-    for arm in arms:
-        df = collect_results(out / arm)
-        result[arm] = [{"seed": seed, **summarize_run(rows)} for seed, rows in df.groupby("seed")]
-    return result
+def summaries(frames: dict[str, Any]) -> dict[str, list[dict[str, float]]]:
+    """Per arm, the :func:`summarize_run` of each finished seed of its results DataFrame."""
+    return {
+        arm: [{"seed": seed, **summarize_run(rows)} for seed, rows in df.groupby("seed")] for arm, df in frames.items()
+    }
 
 
 def table(runs: dict[str, list[dict[str, float]]]) -> str:
@@ -148,7 +146,7 @@ def table(runs: dict[str, list[dict[str, float]]]) -> str:
     return "\n".join(lines)
 
 
-def figure(out: Path, runs: dict[str, list[dict[str, float]]], path: Path) -> None:
+def figure(frames: dict[str, Any], runs: dict[str, list[dict[str, float]]], path: Path) -> None:
     """Bars of the per-arm metrics with their intervals, and each arm's mean test goal rate per epoch."""
     import matplotlib
 
@@ -167,7 +165,7 @@ def figure(out: Path, runs: dict[str, list[dict[str, float]]], path: Path) -> No
         ax.set_title(key)
     ax = axes[-1]
     for i, arm in enumerate(arms):
-        curve = collect_results(out / arm).groupby("epoch")["goal_rate"].mean()
+        curve = frames[arm].groupby("epoch")["goal_rate"].mean()
         ax.plot(curve.index, curve.to_numpy(), color=f"C{i}", label=arm)
     ax.set_xlabel("epoch")
     ax.set_title("test goal rate (mean over seeds)")
@@ -245,11 +243,12 @@ def ablation(argv: list[str] | None = None) -> dict[str, list[dict[str, float]]]
             temperature = mean_temperature(collect_results(args.out / "paper"))
         (args.out / "fixed_temperature.json").write_text(json.dumps({"temperature": temperature}))
         _run_arms(args, fixed, base, temperature)
-    runs = summaries(args.out, list(args.arms))
+    frames = {arm: collect_results(args.out / arm) for arm in args.arms}
+    runs = summaries(frames)
     text = table(runs)
     (args.out / "table.md").write_text(text + "\n")
     (args.out / "runs.json").write_text(json.dumps(runs, indent=1))
-    figure(args.out, runs, args.out / "ablation.png")
+    figure(frames, runs, args.out / "ablation.png")
     print(text)
     return runs
 
