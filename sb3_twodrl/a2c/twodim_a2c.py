@@ -20,6 +20,8 @@ from sb3_twodrl.common.splitting import RewardSplit
 
 SelfTwoDimA2C = TypeVar("SelfTwoDimA2C", bound="TwoDimA2C")
 
+ACTOR_UPDATES = ("log_prob", "preference")
+
 
 class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
     """
@@ -51,6 +53,10 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
         greedy actions get)
     :param preference_bound: the largest sd over the actions of ``"bounded"`` preferences
     :param interest_coef: loss weight of the ``"learned"`` mode's interest head (its target is ``delta+``)
+    :param actor_update: what the utility corrects: ``"log_prob"`` (the policy gradient of the
+        untempered softmax, ``A * grad log pi(a|s)``) or ``"preference"`` (eq. 10 literally, lifted
+        to function approximation as the critics' updates are: ``A * grad p(s, a)``, the taken
+        action's preference alone; ``Discrete`` actions only)
     :param min_temperature: floor of the interest temperature; keeps the policy from freezing
         into argmax once the critics settle and the interest collapses toward 0
     :param max_temperature: ceiling of the interest temperature
@@ -100,8 +106,12 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
         preferences: str = "raw",
         preference_bound: float = 1.0,
         interest_coef: float = 0.5,
+        actor_update: str = "log_prob",
         _init_setup_model: bool = True,
     ):
+        if actor_update not in ACTOR_UPDATES:
+            raise ValueError(f"actor_update must be one of {ACTOR_UPDATES}, got {actor_update!r}")
+        self.actor_update = actor_update
         policy = self._init_two_dim(
             policy,
             n_steps=n_steps,
@@ -147,6 +157,8 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
             device=device,
             _init_setup_model=_init_setup_model,
         )
+        if actor_update == "preference" and not isinstance(self.action_space, spaces.Discrete):
+            raise ValueError(f"actor_update='preference' needs Discrete actions, got {self.action_space}")
 
     def _rollout_log_probs(self, latent_pi: th.Tensor, distribution: Distribution, actions: th.Tensor) -> th.Tensor:
         """A2C never reads ``old_log_prob``: the tempered distribution's, which costs no second distribution."""
@@ -162,17 +174,17 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
             if isinstance(self.action_space, spaces.Discrete):
                 actions = actions.long().flatten()
 
-            values, punishment_values, predicted, log_prob, entropy = self.policy.evaluate_actions_two_dim(
-                rollout_data.observations, actions
+            values, punishment_values, predicted, score, entropy = self.policy.evaluate_actions_two_dim(
+                rollout_data.observations, actions, self.actor_update
             )
             advantages = rollout_data.advantages
             if self.normalize_advantage:
                 advantages = (advantages - advantages.mean()) / (advantages.std() + 1e-8)
 
-            policy_loss = -(advantages * log_prob).mean()
+            policy_loss = -(advantages * score).mean()
             value_loss = F.mse_loss(rollout_data.returns, values.flatten())
             punishment_value_loss = F.mse_loss(rollout_data.punishment_returns, punishment_values.flatten())
-            entropy_loss = -th.mean(-log_prob) if entropy is None else -th.mean(entropy)
+            entropy_loss = -th.mean(-score) if entropy is None else -th.mean(entropy)
 
             loss = (
                 policy_loss

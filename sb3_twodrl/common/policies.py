@@ -161,12 +161,16 @@ class TwoDimPolicyMixin:
         return None if self.interest_net is None else self.interest_net(latent_vf.detach())
 
     def evaluate_actions_two_dim(
-        self, obs: PyTorchObs, actions: th.Tensor
+        self, obs: PyTorchObs, actions: th.Tensor, score: str = "log_prob"
     ) -> tuple[th.Tensor, th.Tensor, th.Tensor | None, th.Tensor, th.Tensor | None]:
-        """``V_R``, ``V_P``, ``I(s)`` (None without a head), log-probability and entropy of ``actions``
-        under the raw preferences (eq. 10)."""
+        """``V_R``, ``V_P``, ``I(s)`` (None without a head), the actor's score of ``actions`` and the
+        entropy under the raw preferences (eq. 10): the score is the log-probability, or with
+        ``score="preference"`` the preference ``p(s, a)`` itself (``Discrete`` actions)."""
         latent_pi, values, punishment_values, predicted = self.evaluate_state(obs)
         distribution = self._get_action_dist_from_latent(latent_pi)  # type: ignore[attr-defined]
+        if score == "preference":
+            taken = self.action_net(latent_pi).gather(1, actions.long().view(-1, 1)).flatten()
+            return values, punishment_values, predicted, taken, distribution.entropy()
         return values, punishment_values, predicted, distribution.log_prob(actions), distribution.entropy()
 
     def predict_critics(self, obs: PyTorchObs) -> tuple[th.Tensor, th.Tensor]:

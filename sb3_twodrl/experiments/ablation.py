@@ -13,7 +13,9 @@ differ only in the 2D-RL arguments); an arm changes only these:
 4. ``paper``: TwoDimA2C, eq. 9 as the paper writes it (``interest="paper", preferences="raw"``).
 5. ``relative_bounded``, ``relative_raw``, ``learned_bounded``: the options of
    :mod:`sb3_twodrl.common.interest`; ``relative_bound25``: the relative interest on preferences
-   bounded to an sd of 2.5 with the floor at 1 (exploratory, derived in ``docs/ablation.md``).
+   bounded to an sd of 2.5 with the floor at 1 (exploratory, derived in ``docs/ablation.md``);
+   ``paper_eq10`` and ``bound25_eq10``: ``paper`` and ``relative_bound25`` with eq. 10 taken
+   literally (``actor_update="preference"``; exploratory).
 
 The fixed arms run after the ``paper`` arm, whose mean temperature over all its learning steps
 (``mean_temperature`` of the rows, weighted by steps) they take unless ``--fixed-temperature`` is
@@ -53,6 +55,17 @@ ARMS: dict[str, tuple[str, dict[str, Any]]] = {
     "relative_bound25": (
         "twoda2c",
         {"interest": "relative", "preferences": "bounded", "preference_bound": 2.5, "min_temperature": 1.0},
+    ),
+    "paper_eq10": ("twoda2c", {"interest": "paper", "preferences": "raw", "actor_update": "preference"}),
+    "bound25_eq10": (
+        "twoda2c",
+        {
+            "interest": "relative",
+            "preferences": "bounded",
+            "preference_bound": 2.5,
+            "min_temperature": 1.0,
+            "actor_update": "preference",
+        },
     ),
 }
 FIXED = ("a2c_fixed", "twod_fixed")
