@@ -163,3 +163,32 @@ def test_the_preference_bound_is_the_largest_spread_and_is_saved(bound: float, t
 def test_a_bad_preference_bound_is_named(bound: float) -> None:
     with pytest.raises(ValueError, match="preference_bound"):
         TwoDimA2C("MlpPolicy", LatticeCorridor(), preferences="bounded", preference_bound=bound)
+
+
+@pytest.mark.parametrize(("actor_update", "corrected"), [("log_prob", False), ("preference", True)])
+def test_eq10_corrects_a_near_certain_crash(actor_update: str, corrected: bool) -> None:
+    """Eq. 10 moves the taken action's preference by the utility whatever its probability: one update
+    on a rollout of crashes into the wall lowers the crash's preference. The log-probability gradient
+    scales it by ``1 - pi`` (~exp(-60) here), so the collapsed actor stays where it is."""
+    model = collapsed_model(temperature=0.5, actor_update=actor_update)
+    obs = th.as_tensor(model.get_env().reset())  # the start, where every trial crashes
+    with th.no_grad():
+        before = model.policy.action_net(model.policy._actor_latent(obs))[:, WEST]
+    model.learn(model.n_steps * model.n_envs)
+    assert model.ep_info_buffer and all(info["l"] == 1 for info in model.ep_info_buffer)  # every trial crashed
+    with th.no_grad():
+        after = model.policy.action_net(model.policy._actor_latent(obs))[:, WEST]
+    if corrected:
+        assert (after < before - 1e-3).all()
+    else:
+        np.testing.assert_allclose(after.numpy(), before.numpy(), atol=1e-5)
+
+
+def test_the_actor_update_is_saved_and_checked(tmp_path: Any) -> None:
+    model = TwoDimA2C("MlpPolicy", LatticeCorridor(), actor_update="preference")
+    model.save(tmp_path / "m.zip")
+    assert TwoDimA2C.load(tmp_path / "m.zip").actor_update == "preference"
+    with pytest.raises(ValueError, match="actor_update must be one of"):
+        TwoDimA2C("MlpPolicy", LatticeCorridor(), actor_update="preferences")
+    with pytest.raises(ValueError, match="actor_update='preference' needs Discrete actions"):
+        TwoDimA2C("MlpPolicy", "Pendulum-v1", actor_update="preference")
