@@ -10,7 +10,7 @@ import pytest
 pytest.importorskip("rl_zoo3")
 pytest.importorskip("scipy")
 
-from sb3_twodrl.experiments.non_regression import non_regression, parse_args
+from sb3_twodrl.experiments.non_regression import check_settings, non_regression, parse_args, settings
 
 
 def test_tiny_pendulum_check_evaluates_every_seed_and_resumes(tmp_path) -> None:
@@ -31,3 +31,17 @@ def test_tiny_pendulum_check_evaluates_every_seed_and_resumes(tmp_path) -> None:
 def test_one_seed_is_refused() -> None:
     with pytest.raises(ValueError, match="seeds"):
         parse_args(["--env", "CartPole-v1", "--seeds", "0"])
+
+
+def test_kept_results_of_other_settings_are_refused(tmp_path) -> None:
+    """A changed entry (or budget) would silently mix old returns into the table: refused, naming the algo."""
+    (tmp_path / "a2c.yml").write_text("CartPole-v1:\n  n_envs: 8\n")
+    (tmp_path / "twoda2c.yml").write_text("CartPole-v1:\n  n_envs: 8\n  interest: 'paper'\n")
+    argv = ["--env", "CartPole-v1", "--hyperparams-dir", str(tmp_path)]
+    check_settings(tmp_path, settings(parse_args(argv)))
+    check_settings(tmp_path, settings(parse_args(argv)))  # the same settings resume
+    (tmp_path / "twoda2c.yml").write_text("CartPole-v1:\n  n_envs: 8\n  interest: 'relative'\n")
+    with pytest.raises(ValueError, match="results of twoda2c with other settings"):
+        check_settings(tmp_path, settings(parse_args(argv)))
+    with pytest.raises(ValueError, match="no entry for 'Acrobot-v1'"):
+        settings(parse_args(["--env", "Acrobot-v1", "--hyperparams-dir", str(tmp_path)]))

@@ -90,17 +90,43 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     return args
 
 
+def settings(args: argparse.Namespace) -> dict[str, str]:
+    """What a kept result must agree on, per algo: its file's entry for the env, the budget, the episodes."""
+    import yaml
+
+    out = {}
+    for algo in args.algos:
+        entries = yaml.safe_load((Path(args.hyperparams_dir) / f"{algo}.yml").read_text()) or {}
+        if args.env not in entries:
+            raise ValueError(f"env: {args.hyperparams_dir}/{algo}.yml has no entry for {args.env!r}")
+        kept = {"entry": entries[args.env], "n_timesteps": args.n_timesteps, "episodes": args.episodes}
+        out[algo] = json.dumps(kept, sort_keys=True, default=str)
+    return out
+
+
+def check_settings(out: Path, current: dict[str, str]) -> None:
+    """Refuse to resume ``out`` if an algo's kept results were made with other settings; record them."""
+    path = out / "settings.json"
+    old = json.loads(path.read_text()) if path.exists() else {}
+    changed = sorted(a for a in old.keys() & current.keys() if old[a] != current[a])
+    if changed:
+        raise ValueError(f"{out} holds results of {', '.join(changed)} with other settings; use another --out")
+    path.write_text(json.dumps({**old, **current}, indent=1, sort_keys=True))
+
+
 def non_regression(argv: list[str] | None = None) -> dict[str, list[float]]:
-    """Run (or resume: finished (algo, seed) results are kept in ``<out>/<env>/returns.json``) and print the table."""
+    """Run (or resume: finished (algo, seed) results are kept in ``<out>/<env>/returns.json``, with the
+    settings they were made with in ``settings.json``) and print the table."""
     args = parse_args(argv)
     out = args.out / args.env
     out.mkdir(parents=True, exist_ok=True)
+    check_settings(out, settings(args))
     store = out / "returns.json"
     done: dict[str, float] = json.loads(store.read_text()) if store.exists() else {}
     todo = [(a, s) for a in args.algos for s in args.seeds if f"{a}_seed{s}" not in done]
     with cf.ProcessPoolExecutor(max_workers=args.workers, mp_context=mp.get_context("spawn")) as pool:
-        settings = (str(out), args.hyperparams_dir, args.episodes, args.n_timesteps)
-        jobs = {pool.submit(train_and_evaluate, a, args.env, s, *settings): (a, s) for a, s in todo}
+        shared = (str(out), args.hyperparams_dir, args.episodes, args.n_timesteps)
+        jobs = {pool.submit(train_and_evaluate, a, args.env, s, *shared): (a, s) for a, s in todo}
         for job in cf.as_completed(jobs):
             algo, seed = jobs[job]
             done[f"{algo}_seed{seed}"] = job.result()
