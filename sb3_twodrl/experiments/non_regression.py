@@ -26,11 +26,19 @@ EVAL_SEED = 10**6
 
 
 def train_and_evaluate(
-    algo: str, env_id: str, seed: int, out: str, hyperparams_dir: str, episodes: int, n_timesteps: int | None = None
+    algo: str,
+    env_id: str,
+    seed: int,
+    out: str,
+    hyperparams_dir: str,
+    episodes: int,
+    n_timesteps: int | None = None,
+    overrides: tuple[str, ...] = (),
 ) -> float:
     """Train ``algo`` on ``env_id`` with rl-zoo3 (seed ``seed``, logs in ``out``); its mean evaluation return.
 
-    ``n_timesteps``: the budget, if not the file's (rl-zoo3's ``-n``).
+    ``n_timesteps``: the budget, if not the file's (rl-zoo3's ``-n``); ``overrides``: ``KEY:VALUE``
+    settings over the file's entry (rl-zoo3's ``--hyperparams``).
     """
     import torch as th
     from rl_zoo3.train import train
@@ -47,6 +55,8 @@ def train_and_evaluate(
     argv += ["--vec-env", "dummy", "--log-interval", "-1", "--device", "cpu"]
     if n_timesteps is not None:
         argv += ["--n-timesteps", str(n_timesteps)]
+    if overrides:
+        argv += ["--hyperparams", *overrides]
     run_zoo_entry("train.py", prepare_zoo_argv(argv, hyperparams_dir), train)
     (run,) = sorted((log / algo).glob(f"{env_id}_*"))
     model = algo_class(algo).load(run / f"{env_id}.zip", device="cpu")
@@ -82,6 +92,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--episodes", type=int, default=20, help="deterministic evaluation episodes per model")
     p.add_argument("--n-timesteps", type=int, help="training budget (default: each file's n_timesteps)")
     p.add_argument("--hyperparams-dir", default=str(_CHECKOUT_HYPERPARAMS))
+    p.add_argument(
+        "--set",
+        nargs="+",
+        default=[],
+        metavar="KEY:VALUE",
+        help="settings over the entry of every algo but the baseline (rl-zoo3's --hyperparams format)",
+    )
     p.add_argument("--out", type=Path, default=Path("runs") / "non_regression")
     p.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     args = p.parse_args(argv)
@@ -100,6 +117,8 @@ def settings(args: argparse.Namespace) -> dict[str, str]:
         if args.env not in entries:
             raise ValueError(f"env: {args.hyperparams_dir}/{algo}.yml has no entry for {args.env!r}")
         kept = {"entry": entries[args.env], "n_timesteps": args.n_timesteps, "episodes": args.episodes}
+        if algo != args.algos[0]:
+            kept["set"] = sorted(args.set)
         out[algo] = json.dumps(kept, sort_keys=True, default=str)
     return out
 
@@ -126,7 +145,8 @@ def non_regression(argv: list[str] | None = None) -> dict[str, list[float]]:
     todo = [(a, s) for a in args.algos for s in args.seeds if f"{a}_seed{s}" not in done]
     with cf.ProcessPoolExecutor(max_workers=args.workers, mp_context=mp.get_context("spawn")) as pool:
         shared = (str(out), args.hyperparams_dir, args.episodes, args.n_timesteps)
-        jobs = {pool.submit(train_and_evaluate, a, args.env, s, *shared): (a, s) for a, s in todo}
+        overrides = {a: () if a == args.algos[0] else tuple(args.set) for a in args.algos}
+        jobs = {pool.submit(train_and_evaluate, a, args.env, s, *shared, overrides[a]): (a, s) for a, s in todo}
         for job in cf.as_completed(jobs):
             algo, seed = jobs[job]
             done[f"{algo}_seed{seed}"] = job.result()
