@@ -184,11 +184,55 @@ def test_eq10_corrects_a_near_certain_crash(actor_update: str, corrected: bool) 
         np.testing.assert_allclose(after.numpy(), before.numpy(), atol=1e-5)
 
 
-def test_the_actor_update_is_saved_and_checked(tmp_path: Any) -> None:
-    model = TwoDimA2C("MlpPolicy", LatticeCorridor(), actor_update="preference")
+@pytest.mark.parametrize("actor_update", ["preference", "tempered"])
+def test_the_actor_update_is_saved_and_checked(actor_update: str, tmp_path: Any) -> None:
+    model = TwoDimA2C("MlpPolicy", LatticeCorridor(), actor_update=actor_update)
     model.save(tmp_path / "m.zip")
-    assert TwoDimA2C.load(tmp_path / "m.zip").actor_update == "preference"
+    assert TwoDimA2C.load(tmp_path / "m.zip").actor_update == actor_update
     with pytest.raises(ValueError, match="actor_update must be one of"):
         TwoDimA2C("MlpPolicy", LatticeCorridor(), actor_update="preferences")
     with pytest.raises(ValueError, match="actor_update='preference' needs Discrete actions"):
         TwoDimA2C("MlpPolicy", "Pendulum-v1", actor_update="preference")
+
+
+@pytest.mark.parametrize("env_id", ["CartPole-v1", "Pendulum-v1"])
+def test_the_tempered_update_at_temperature_one_is_the_log_prob_update(env_id: str) -> None:
+    """At ``T = 1`` the tempered policy is the raw one: both actor updates learn the same parameters
+    (up to float32 rounding: a Gaussian's std is broadcast over the batch before the sum)."""
+
+    def learned(actor_update: str) -> list[th.Tensor]:
+        model = TwoDimA2C("MlpPolicy", env_id, n_steps=8, temperature=1.0, actor_update=actor_update, seed=3)
+        model.learn(64)
+        return [p.detach().clone() for p in model.policy.parameters()]
+
+    for tempered, raw in zip(learned("tempered"), learned("log_prob"), strict=True):
+        th.testing.assert_close(tempered, raw, rtol=1e-6, atol=1e-7)
+
+
+@pytest.mark.parametrize("temperature", [0.5, 2.0])
+def test_the_tempered_score_is_unbiased_under_the_drawing_distribution(temperature: float) -> None:
+    """On-policy: with the same utility for every action, ``E_{a ~ pi_T}[grad log pi_T(a|s)] = 0``, so
+    a constant utility moves no preference. The raw score's mean, ``pi_T - pi_1``, is not 0 at ``T != 1``."""
+    policy = collapsed_model().policy
+    with th.no_grad():
+        policy.action_net.bias.copy_(th.tensor([0.5, -0.5, 1.0, 0.0]))
+    obs = th.as_tensor(np.repeat(np.eye(18, dtype=np.float32)[:1], 4, axis=0))
+    actions = th.arange(4)
+    inverse = th.full((4,), 1.0 / temperature)
+
+    def mean_score_gradient(score: str) -> th.Tensor:
+        policy.zero_grad()
+        *_, scores, _ = policy.evaluate_actions_two_dim(obs, actions, score, inverse)
+        with th.no_grad():
+            probs = policy.tempered_distribution(policy._actor_latent(obs[:1]), inverse[:1]).distribution.probs[0]
+        (probs * scores).sum().backward()
+        return policy.action_net.bias.grad.clone()
+
+    assert th.allclose(mean_score_gradient("tempered"), th.zeros(4), atol=1e-6)
+    assert mean_score_gradient("log_prob").abs().max() > 1e-2
+
+
+def test_the_tempered_score_needs_the_temperatures() -> None:
+    policy = collapsed_model().policy
+    with pytest.raises(ValueError, match="inverse temperatures"):
+        policy.evaluate_actions_two_dim(th.zeros(1, 18), th.zeros(1), "tempered")

@@ -20,7 +20,7 @@ from sb3_twodrl.common.splitting import RewardSplit
 
 SelfTwoDimA2C = TypeVar("SelfTwoDimA2C", bound="TwoDimA2C")
 
-ACTOR_UPDATES = ("log_prob", "preference")
+ACTOR_UPDATES = ("log_prob", "tempered", "preference")
 
 
 class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
@@ -54,7 +54,9 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
     :param preference_bound: the largest sd over the actions of ``"bounded"`` preferences
     :param interest_coef: loss weight of the ``"learned"`` mode's interest head (its target is ``delta+``)
     :param actor_update: what the utility corrects: ``"log_prob"`` (the policy gradient of the
-        untempered softmax, ``A * grad log pi(a|s)``) or ``"preference"`` (eq. 10 literally, lifted
+        untempered softmax, ``A * grad log pi(a|s)``), ``"tempered"`` (the policy gradient of the
+        tempered policy that drew the action, eq. 9: ``A * grad log pi_T(a|s)`` at the action's own
+        ``T``, on-policy) or ``"preference"`` (eq. 10 literally, lifted
         to function approximation as the critics' updates are: ``A * grad p(s, a)``, the taken
         action's preference alone; ``Discrete`` actions only)
     :param min_temperature: floor of the interest temperature; keeps the policy from freezing
@@ -175,7 +177,7 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
                 actions = actions.long().flatten()
 
             values, punishment_values, predicted, score, entropy = self.policy.evaluate_actions_two_dim(
-                rollout_data.observations, actions, self.actor_update
+                rollout_data.observations, actions, self.actor_update, rollout_data.inverse_temperatures
             )
             advantages = rollout_data.advantages
             if self.normalize_advantage:

@@ -12,7 +12,8 @@ from stable_baselines3.common.vec_env import VecNormalize
 
 class TwoDimRolloutBufferSamples(NamedTuple):
     """SB3's rollout samples (``advantages`` being the utility) plus the punishment critic's old values and
-    target, and the interest ``delta+`` of each sample's transition (the ``"learned"`` interest head's target)."""
+    target, the interest ``delta+`` of each sample's transition (the ``"learned"`` interest head's target) and the
+    inverse temperature its action was drawn with (eq. 9)."""
 
     observations: PyTorchObs
     actions: th.Tensor
@@ -23,6 +24,7 @@ class TwoDimRolloutBufferSamples(NamedTuple):
     old_punishment_values: th.Tensor
     punishment_returns: th.Tensor
     interests: th.Tensor
+    inverse_temperatures: th.Tensor
 
 
 def td_errors_and_gae(
@@ -144,7 +146,7 @@ class TwoDimBufferMixin:
 
     def get(self, batch_size: int | None = None) -> Generator[TwoDimRolloutBufferSamples, None, None]:
         if not self.generator_ready:  # flattened like SB3's arrays, so that they stay aligned with them
-            for name in ("punishment_values", "punishment_returns", "interests"):
+            for name in ("punishment_values", "punishment_returns", "interests", "inverse_temperatures"):
                 setattr(self, name, self.swap_and_flatten(getattr(self, name)))  # type: ignore[attr-defined]
         yield from super().get(batch_size)  # type: ignore[misc]
 
@@ -156,6 +158,7 @@ class TwoDimBufferMixin:
             old_punishment_values=to_torch(self.punishment_values[batch_inds].flatten()),
             punishment_returns=to_torch(self.punishment_returns[batch_inds].flatten()),
             interests=to_torch(self.interests[batch_inds].flatten()),
+            inverse_temperatures=to_torch(self.inverse_temperatures[batch_inds].flatten()),
         )
 
 

@@ -161,13 +161,24 @@ class TwoDimPolicyMixin:
         return None if self.interest_net is None else self.interest_net(latent_vf.detach())
 
     def evaluate_actions_two_dim(
-        self, obs: PyTorchObs, actions: th.Tensor, score: str = "log_prob"
+        self,
+        obs: PyTorchObs,
+        actions: th.Tensor,
+        score: str = "log_prob",
+        inverse_temperature: th.Tensor | None = None,
     ) -> tuple[th.Tensor, th.Tensor, th.Tensor | None, th.Tensor, th.Tensor | None]:
         """``V_R``, ``V_P``, ``I(s)`` (None without a head), the actor's score of ``actions`` and the
-        entropy under the raw preferences (eq. 10): the score is the log-probability, or with
-        ``score="preference"`` the preference ``p(s, a)`` itself (``Discrete`` actions)."""
+        entropy (eq. 10): the score is the log-probability under the raw preferences (``T = 1``), with
+        ``score="tempered"`` the log-probability and entropy under the tempered distribution the
+        actions were drawn from (eq. 9, at ``inverse_temperature``), or with ``score="preference"``
+        the preference ``p(s, a)`` itself (``Discrete`` actions)."""
         latent_pi, values, punishment_values, predicted = self.evaluate_state(obs)
-        distribution = self._get_action_dist_from_latent(latent_pi)  # type: ignore[attr-defined]
+        if score == "tempered":
+            if inverse_temperature is None:
+                raise ValueError('score="tempered" needs the inverse temperatures the actions were drawn with')
+            distribution = self.tempered_distribution(latent_pi, inverse_temperature)
+        else:
+            distribution = self._get_action_dist_from_latent(latent_pi)  # type: ignore[attr-defined]
         if score == "preference":
             taken = self.action_net(latent_pi).gather(1, actions.long().view(-1, 1)).flatten()
             return values, punishment_values, predicted, taken, distribution.entropy()
@@ -206,13 +217,13 @@ class TwoDimPolicyMixin:
             inverse *= interest > 0
         return inverse
 
-    def tempered_distribution(self, latent_pi: th.Tensor, inverse_temperature: np.ndarray) -> Distribution:
+    def tempered_distribution(self, latent_pi: th.Tensor, inverse_temperature: np.ndarray | th.Tensor) -> Distribution:
         """Action distribution of eq. 9: preferences times ``1 / T``; a Gaussian's std (gSDE: its noise) times ``T``.
 
         gSDE's noise and std are linear in its latent features, so scaling the features by ``T``
         scales both (the exploration matrix is left as sampled).
         """
-        inverse = th.from_numpy(inverse_temperature[:, None]).to(latent_pi.device)
+        inverse = th.as_tensor(inverse_temperature, device=latent_pi.device).reshape(-1, 1)
         mean_actions = self.action_net(latent_pi)
         if isinstance(self.action_dist, StateDependentNoiseDistribution):
             return self.action_dist.proba_distribution(mean_actions, self.log_std, latent_pi / inverse)

@@ -15,7 +15,8 @@ differ only in the 2D-RL arguments); an arm changes only these:
    :mod:`sb3_twodrl.common.interest`; ``relative_bound25``: the relative interest on preferences
    bounded to an sd of 2.5 with the floor at 1 (exploratory, derived in ``docs/ablation.md``);
    ``paper_eq10`` and ``bound25_eq10``: ``paper`` and ``relative_bound25`` with eq. 10 taken
-   literally (``actor_update="preference"``; exploratory).
+   literally (``actor_update="preference"``; exploratory); ``paper_tempered``: ``paper`` with the
+   policy gradient of the tempered policy that acted (``actor_update="tempered"``).
 
 The fixed arms run after the ``paper`` arm, whose mean temperature over all its learning steps
 (``mean_temperature`` of the rows, weighted by steps) they take unless ``--fixed-temperature`` is
@@ -57,6 +58,7 @@ ARMS: dict[str, tuple[str, dict[str, Any]]] = {
         {"interest": "relative", "preferences": "bounded", "preference_bound": 2.5, "min_temperature": 1.0},
     ),
     "paper_eq10": ("twoda2c", {"interest": "paper", "preferences": "raw", "actor_update": "preference"}),
+    "paper_tempered": ("twoda2c", {"interest": "paper", "preferences": "raw", "actor_update": "tempered"}),
     "bound25_eq10": (
         "twoda2c",
         {
