@@ -4,8 +4,8 @@
 Every grid point runs ``--epochs`` paper-sized epochs (K learning + M test trials) for each seed
 through the experiment runner and is scored by the mean test goal rate over its epochs (the area
 under figure 3's curve; ties: reward per step); it prints one row per point with learning
-env-steps/s. The grid is what is stated in ``--n-envs`` x ``--learning-rates`` x ``--n-steps``;
-the other settings are the YAML's.
+env-steps/s. The grid is what is stated in ``--n-envs`` x ``--learning-rates`` x ``--n-steps`` x
+``--ent-coefs``; the other settings are the YAML's.
 
     OMP_NUM_THREADS=1 nice -n 10 python scripts/search_baseline.py --env NomadOfficeMemorable-v0
 """
@@ -30,6 +30,7 @@ def main() -> None:
     p.add_argument("--n-envs", type=int, nargs="+", default=[16, 64, 256])
     p.add_argument("--learning-rates", type=float, nargs="+", default=[7e-4, 3e-3])
     p.add_argument("--n-steps", type=int, nargs="+", default=[5])
+    p.add_argument("--ent-coefs", type=float, nargs="+", default=[0.0])
     p.add_argument("--epochs", type=int, default=8)
     p.add_argument("--learn-episodes", "-K", type=int, default=1000)
     p.add_argument("--test-episodes", "-M", type=int, default=100)
@@ -40,11 +41,11 @@ def main() -> None:
     import envs  # noqa: F401  (registers the IDs)
 
     base = load_hyperparams(ROOT / "scripts" / "hyperparams" / f"{args.algo}.yml", args.env)
-    points = list(itertools.product(args.n_envs, args.learning_rates, args.n_steps))
+    points = list(itertools.product(args.n_envs, args.learning_rates, args.n_steps, args.ent_coefs))
     specs = []
-    for n_envs, lr, n_steps in points:
-        hp = {**base, "n_envs": n_envs, "learning_rate": lr, "n_steps": n_steps}
-        out = Path(args.out) / args.env / f"n{n_envs}_lr{lr:g}_s{n_steps}"
+    for n_envs, lr, n_steps, ent_coef in points:
+        hp = {**base, "n_envs": n_envs, "learning_rate": lr, "n_steps": n_steps, "ent_coef": ent_coef}
+        out = Path(args.out) / args.env / point_name(n_envs, lr, n_steps, ent_coef)
         for seed in args.seeds:
             spec = RunSpec(
                 args.env, args.algo, seed, args.epochs, args.learn_episodes, args.test_episodes, hp, str(out)
@@ -58,12 +59,12 @@ def main() -> None:
         f"seeds {args.seeds}"
     )
     print(
-        "| n_envs | learning rate | n_steps | mean test goal rate | per seed | mean reward per step "
-        "| first epoch goal rate >= 0.5 (per seed) | env-steps/s of wall time |"
+        "| n_envs | learning rate | n_steps | ent_coef | mean test goal rate | per seed | final goal rate per seed "
+        "| mean reward per step | first epoch goal rate >= 0.5 (per seed) | env-steps/s of wall time |"
     )
-    print("|---|---|---|---|---|---|---|---|")
-    for n_envs, lr, n_steps in points:
-        df = collect_results(Path(args.out) / args.env / f"n{n_envs}_lr{lr:g}_s{n_steps}")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for n_envs, lr, n_steps, ent_coef in points:
+        df = collect_results(Path(args.out) / args.env / point_name(n_envs, lr, n_steps, ent_coef))
         per_seed = df.groupby("seed")["goal_rate"].mean()
         first = [
             str(int(g.loc[g["goal_rate"] >= 0.5, "epoch"].min())) if (g["goal_rate"] >= 0.5).any() else "-"
@@ -72,9 +73,16 @@ def main() -> None:
         last = df.sort_values("epoch").groupby("seed").tail(1)
         rate = (last["env_steps"] / last["wall_s"]).mean()
         print(
-            f"| {n_envs} | {lr:g} | {n_steps} | {per_seed.mean():.2f} | {', '.join(f'{v:.2f}' for v in per_seed)} "
+            f"| {n_envs} | {lr:g} | {n_steps} | {ent_coef:g} | {per_seed.mean():.2f} "
+            f"| {', '.join(f'{v:.2f}' for v in per_seed)} | {', '.join(f'{v:.2f}' for v in last['goal_rate'])} "
             f"| {df['reward_per_step'].mean():.3f} | {', '.join(first)} | {rate:,.0f} |"
         )
+
+
+def point_name(n_envs: int, lr: float, n_steps: int, ent_coef: float) -> str:
+    """The grid point's folder (the entropy coefficient named only when it is not 0, as in earlier searches)."""
+    name = f"n{n_envs}_lr{lr:g}_s{n_steps}"
+    return name if ent_coef == 0 else f"{name}_ent{ent_coef:g}"
 
 
 if __name__ == "__main__":
