@@ -30,7 +30,7 @@ def main() -> None:
     p.add_argument("--n-envs", type=int, nargs="+", default=[16, 64, 256])
     p.add_argument("--learning-rates", type=float, nargs="+", default=[7e-4, 3e-3])
     p.add_argument("--n-steps", type=int, nargs="+", default=[5])
-    p.add_argument("--ent-coefs", type=float, nargs="+", default=[0.0])
+    p.add_argument("--ent-coefs", type=float, nargs="+", default=None, help="default: the YAML's")
     p.add_argument("--epochs", type=int, default=8)
     p.add_argument("--learn-episodes", "-K", type=int, default=1000)
     p.add_argument("--test-episodes", "-M", type=int, default=100)
@@ -41,7 +41,8 @@ def main() -> None:
     import envs  # noqa: F401  (registers the IDs)
 
     base = load_hyperparams(ROOT / "scripts" / "hyperparams" / f"{args.algo}.yml", args.env)
-    points = list(itertools.product(args.n_envs, args.learning_rates, args.n_steps, args.ent_coefs))
+    ent_coefs = args.ent_coefs or [base.get("ent_coef", 0.0)]
+    points = list(itertools.product(args.n_envs, args.learning_rates, args.n_steps, ent_coefs))
     specs = []
     for n_envs, lr, n_steps, ent_coef in points:
         hp = {**base, "n_envs": n_envs, "learning_rate": lr, "n_steps": n_steps, "ent_coef": ent_coef}
