@@ -73,3 +73,11 @@ def test_tiny_ablation_end_to_end(tmp_path: Path) -> None:
     fixed = collect_results(tmp_path / "twod_fixed")
     assert fixed["mean_temperature"].dropna().to_numpy() == pytest.approx(temperature, rel=1e-5)
     assert (tmp_path / "table.md").read_text().count("\n") == 2 + 4 and (tmp_path / "ablation.png").exists()
+
+
+def test_the_figure_takes_arms_whose_every_seed_learned(tmp_path: Path) -> None:
+    """10 of 10 seeds learned: the interval's upper end equals the mean up to rounding (no negative error bar)."""
+    learned = [ablation.summarize_run(rows([0.2, 1.0, 1.0], [0.1, 0.1, 0.1])) for _ in range(10)]
+    frames = {"a2c": pd.DataFrame({"epoch": [1, 2, 3], "goal_rate": [0.2, 1.0, 1.0]})}
+    ablation.figure(frames, {"a2c": learned}, tmp_path / "ablation.png")
+    assert (tmp_path / "ablation.png").exists()

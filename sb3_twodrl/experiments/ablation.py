@@ -174,7 +174,7 @@ def figure(frames: dict[str, Any], runs: dict[str, list[dict[str, float]]], path
         for i, arm in enumerate(arms):
             mean, low, high, n = interval([r[key] for r in runs[arm]], count=key == "learned")
             if n:
-                error = None if math.isnan(low) else [[mean - low], [high - mean]]
+                error = None if math.isnan(low) else [[max(mean - low, 0.0)], [max(high - mean, 0.0)]]
                 ax.bar(i, mean, yerr=error, capsize=4, color=f"C{i}")
         ax.set_xticks(range(len(arms)), arms, rotation=40, ha="right")
         ax.set_title(key)
