@@ -56,9 +56,14 @@ def test_first_action_of_each_episode_is_uniform() -> None:
     assert (buffer.inverse_temperatures[~starts] > 0).all()
 
 
-def test_actor_update_does_not_depend_on_the_temperature() -> None:
-    """Design choice: the gradient flows through the raw preferences (eq. 10 has no temperature)."""
-    model = TwoDimA2C("MlpPolicy", LatticeCorridor(), temperature=0.2, seed=0, n_steps=16).learn(16)
+@pytest.mark.parametrize(("actor_update", "independent"), [("log_prob", True), ("tempered", False)])
+def test_which_actor_update_depends_on_the_temperature(actor_update: str, independent: bool) -> None:
+    """``"log_prob"``: the gradient flows through the raw preferences (eq. 10 has no temperature), so
+    one update is the same whatever temperature the actions were drawn at; ``"tempered"`` (the
+    default): the score is of the policy that drew them, so it is not."""
+    model = TwoDimA2C(
+        "MlpPolicy", LatticeCorridor(), temperature=0.2, seed=0, n_steps=16, actor_update=actor_update
+    ).learn(16)
     policy_state = copy.deepcopy(model.policy.state_dict())
     optimizer_state = copy.deepcopy(model.policy.optimizer.state_dict())
     updated = []
@@ -71,8 +76,8 @@ def test_actor_update_does_not_depend_on_the_temperature() -> None:
         model.train()
         updated.append(copy.deepcopy(model.policy.state_dict()))
     assert not th.equal(updated[0]["action_net.weight"], policy_state["action_net.weight"])
-    for name, tensor in updated[0].items():
-        assert th.equal(updated[1][name], tensor), name
+    same = all(th.equal(updated[1][name], tensor) for name, tensor in updated[0].items())
+    assert same == independent
 
 
 def outcomes(model: TwoDimA2C, deterministic: bool, episodes: int = 30) -> list[str]:
