@@ -59,8 +59,8 @@ def test_first_action_of_each_episode_is_uniform() -> None:
 @pytest.mark.parametrize(("actor_update", "independent"), [("log_prob", True), ("tempered", False)])
 def test_which_actor_update_depends_on_the_temperature(actor_update: str, independent: bool) -> None:
     """``"log_prob"``: the gradient flows through the raw preferences (eq. 10 has no temperature), so
-    one update is the same whatever temperature the actions were drawn at; ``"tempered"`` (the
-    default): the score is of the policy that drew them, so it is not."""
+    one update is the same whatever temperature the actions were drawn at; ``"tempered"``: the score
+    is of the policy that drew them, so it is not."""
     model = TwoDimA2C(
         "MlpPolicy", LatticeCorridor(), temperature=0.2, seed=0, n_steps=16, actor_update=actor_update
     ).learn(16)

@@ -53,10 +53,10 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
         greedy actions get)
     :param preference_bound: the largest sd over the actions of ``"bounded"`` preferences
     :param interest_coef: loss weight of the ``"learned"`` mode's interest head (its target is ``delta+``)
-    :param actor_update: what the utility corrects: ``"tempered"`` (default: the policy gradient of
-        the tempered policy that drew the action, eq. 9: ``A * grad log pi_T(a|s)`` at the action's
-        own ``T``, on-policy), ``"log_prob"`` (the policy gradient of the untempered softmax,
-        ``A * grad log pi(a|s)``: off-policy at ``T != 1``) or ``"preference"`` (eq. 10 literally, lifted
+    :param actor_update: what the utility corrects: ``"log_prob"`` (default: the policy gradient of
+        the untempered softmax, ``A * grad log pi(a|s)``: off-policy at ``T != 1``), ``"tempered"``
+        (the policy gradient of the tempered policy that drew the action, eq. 9: ``A * grad log
+        pi_T(a|s)`` at the action's own ``T``, on-policy) or ``"preference"`` (eq. 10 literally, lifted
         to function approximation as the critics' updates are: ``A * grad p(s, a)``, the taken
         action's preference alone; ``Discrete`` actions only)
     :param min_temperature: floor of the interest temperature; keeps the policy from freezing
@@ -108,7 +108,7 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
         preferences: str = "raw",
         preference_bound: float = 1.0,
         interest_coef: float = 0.5,
-        actor_update: str = "tempered",
+        actor_update: str = "log_prob",
         _init_setup_model: bool = True,
     ):
         if actor_update not in ACTOR_UPDATES:
