@@ -46,7 +46,7 @@ from sb3_twodrl.experiments.grid import check_config, collect_results, pending, 
 from sb3_twodrl.experiments.intervals import mean_ci, wilson
 from sb3_twodrl.experiments.protocol import PRESETS, RunSpec, load_hyperparams
 
-_OLD_SCORE = {"actor_update": "log_prob"}
+_LOG_PROB_SCORE = {"actor_update": "log_prob"}
 """The actor update every arm but ``paper_tempered`` and the eq. 10 arms ran with (the default): pinned, so
 that the arms keep their rows whatever the default becomes."""
 
@@ -54,13 +54,13 @@ ARMS: dict[str, tuple[str, dict[str, Any]]] = {
     "a2c": ("a2c", {}),
     "a2c_fixed": (
         "twoda2c",
-        {"reward_split": "none", "punishment_weight": 0.0, "punishment_vf_coef": 0.0, **_OLD_SCORE},
+        {"reward_split": "none", "punishment_weight": 0.0, "punishment_vf_coef": 0.0, **_LOG_PROB_SCORE},
     ),
-    "twod_fixed": ("twoda2c", {**_OLD_SCORE}),
-    "paper": ("twoda2c", {"interest": "paper", "preferences": "raw", **_OLD_SCORE}),
-    "relative_bounded": ("twoda2c", {"interest": "relative", "preferences": "bounded", **_OLD_SCORE}),
-    "relative_raw": ("twoda2c", {"interest": "relative", "preferences": "raw", **_OLD_SCORE}),
-    "learned_bounded": ("twoda2c", {"interest": "learned", "preferences": "bounded", **_OLD_SCORE}),
+    "twod_fixed": ("twoda2c", {**_LOG_PROB_SCORE}),
+    "paper": ("twoda2c", {"interest": "paper", "preferences": "raw", **_LOG_PROB_SCORE}),
+    "relative_bounded": ("twoda2c", {"interest": "relative", "preferences": "bounded", **_LOG_PROB_SCORE}),
+    "relative_raw": ("twoda2c", {"interest": "relative", "preferences": "raw", **_LOG_PROB_SCORE}),
+    "learned_bounded": ("twoda2c", {"interest": "learned", "preferences": "bounded", **_LOG_PROB_SCORE}),
     "relative_bound25": (
         "twoda2c",
         {
@@ -68,7 +68,7 @@ ARMS: dict[str, tuple[str, dict[str, Any]]] = {
             "preferences": "bounded",
             "preference_bound": 2.5,
             "min_temperature": 1.0,
-            **_OLD_SCORE,
+            **_LOG_PROB_SCORE,
         },
     ),
     "paper_eq10": ("twoda2c", {"interest": "paper", "preferences": "raw", "actor_update": "preference"}),
