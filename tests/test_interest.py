@@ -184,7 +184,7 @@ def test_eq10_corrects_a_near_certain_crash(actor_update: str, corrected: bool) 
         np.testing.assert_allclose(after.numpy(), before.numpy(), atol=1e-5)
 
 
-@pytest.mark.parametrize("actor_update", ["preference", "tempered"])
+@pytest.mark.parametrize("actor_update", ["preference", "tempered", "compensated"])
 def test_the_actor_update_is_saved_and_checked(actor_update: str, tmp_path: Any) -> None:
     model = TwoDimA2C("MlpPolicy", LatticeCorridor(), actor_update=actor_update)
     model.save(tmp_path / "m.zip")
@@ -195,8 +195,9 @@ def test_the_actor_update_is_saved_and_checked(actor_update: str, tmp_path: Any)
         TwoDimA2C("MlpPolicy", "Pendulum-v1", actor_update="preference")
 
 
+@pytest.mark.parametrize("actor_update", ["tempered", "compensated"])
 @pytest.mark.parametrize("env_id", ["CartPole-v1", "Pendulum-v1"])
-def test_the_tempered_update_at_temperature_one_is_the_log_prob_update(env_id: str) -> None:
+def test_the_tempered_update_at_temperature_one_is_the_log_prob_update(env_id: str, actor_update: str) -> None:
     """At ``T = 1`` the tempered policy is the raw one: both actor updates learn the same parameters
     (up to float32 rounding: a Gaussian's std is broadcast over the batch before the sum)."""
 
@@ -205,12 +206,13 @@ def test_the_tempered_update_at_temperature_one_is_the_log_prob_update(env_id: s
         model.learn(64)
         return [p.detach().clone() for p in model.policy.parameters()]
 
-    for tempered, raw in zip(learned("tempered"), learned("log_prob"), strict=True):
+    for tempered, raw in zip(learned(actor_update), learned("log_prob"), strict=True):
         th.testing.assert_close(tempered, raw, rtol=1e-6, atol=1e-7)
 
 
+@pytest.mark.parametrize("score", ["tempered", "compensated"])
 @pytest.mark.parametrize("temperature", [0.5, 2.0])
-def test_the_tempered_score_is_unbiased_under_the_drawing_distribution(temperature: float) -> None:
+def test_the_tempered_score_is_unbiased_under_the_drawing_distribution(temperature: float, score: str) -> None:
     """On-policy: with the same utility for every action, ``E_{a ~ pi_T}[grad log pi_T(a|s)] = 0``, so
     a constant utility moves no preference. The raw score's mean, ``pi_T - pi_1``, is not 0 at ``T != 1``."""
     policy = collapsed_model().policy
@@ -228,11 +230,36 @@ def test_the_tempered_score_is_unbiased_under_the_drawing_distribution(temperatu
         (probs * scores).sum().backward()
         return policy.action_net.bias.grad.clone()
 
-    assert th.allclose(mean_score_gradient("tempered"), th.zeros(4), atol=1e-6)
+    assert th.allclose(mean_score_gradient(score), th.zeros(4), atol=1e-6)
     assert mean_score_gradient("log_prob").abs().max() > 1e-2
 
 
-def test_the_tempered_score_needs_the_temperatures() -> None:
+@pytest.mark.parametrize("inverse_temperature", [0.0, 0.1, 2.0])
+def test_the_compensated_score_moves_preferences_by_one_hot_minus_the_drawing_distribution(
+    inverse_temperature: float,
+) -> None:
+    """``T * grad log pi_T(a|s)`` with respect to the preferences is ``1[a] - pi_T(.|s)`` at any ``T``
+    (the tempered score's is that over ``T``), and stays finite for uniform actions (``1/T = 0``)."""
+    policy = collapsed_model().policy
+    with th.no_grad():
+        policy.action_net.bias.copy_(th.tensor([0.5, -0.5, 1.0, 0.0]))
+    obs = th.as_tensor(np.eye(18, dtype=np.float32)[:1])
+    inverse = th.full((1,), inverse_temperature)
+
+    def score_gradient(score: str) -> th.Tensor:
+        policy.zero_grad()
+        *_, scores, _ = policy.evaluate_actions_two_dim(obs, th.tensor([2]), score, inverse)
+        scores.sum().backward()
+        return policy.action_net.bias.grad.clone()
+
+    with th.no_grad():
+        probs = policy.tempered_distribution(policy._actor_latent(obs), inverse).distribution.probs[0]
+    th.testing.assert_close(score_gradient("compensated"), th.eye(4)[2] - probs)
+    th.testing.assert_close(score_gradient("tempered"), inverse_temperature * (th.eye(4)[2] - probs))
+
+
+@pytest.mark.parametrize("score", ["tempered", "compensated"])
+def test_the_tempered_score_needs_the_temperatures(score: str) -> None:
     policy = collapsed_model().policy
     with pytest.raises(ValueError, match="inverse temperatures"):
-        policy.evaluate_actions_two_dim(th.zeros(1, 18), th.zeros(1), "tempered")
+        policy.evaluate_actions_two_dim(th.zeros(1, 18), th.zeros(1), score)

@@ -56,7 +56,9 @@ def test_first_action_of_each_episode_is_uniform() -> None:
     assert (buffer.inverse_temperatures[~starts] > 0).all()
 
 
-@pytest.mark.parametrize(("actor_update", "independent"), [("log_prob", True), ("tempered", False)])
+@pytest.mark.parametrize(
+    ("actor_update", "independent"), [("log_prob", True), ("tempered", False), ("compensated", False)]
+)
 def test_which_actor_update_depends_on_the_temperature(actor_update: str, independent: bool) -> None:
     """``"log_prob"``: the gradient flows through the raw preferences (eq. 10 has no temperature), so
     one update is the same whatever temperature the actions were drawn at; ``"tempered"``: the score

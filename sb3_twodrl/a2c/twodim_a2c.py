@@ -20,7 +20,7 @@ from sb3_twodrl.common.splitting import RewardSplit
 
 SelfTwoDimA2C = TypeVar("SelfTwoDimA2C", bound="TwoDimA2C")
 
-ACTOR_UPDATES = ("log_prob", "tempered", "preference")
+ACTOR_UPDATES = ("log_prob", "tempered", "compensated", "preference")
 
 
 class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
@@ -56,7 +56,10 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
     :param actor_update: what the utility corrects: ``"log_prob"`` (default: the policy gradient of
         the untempered softmax, ``A * grad log pi(a|s)``: off-policy at ``T != 1``), ``"tempered"``
         (the policy gradient of the tempered policy that drew the action, eq. 9: ``A * grad log
-        pi_T(a|s)`` at the action's own ``T``, on-policy) or ``"preference"`` (eq. 10 literally, lifted
+        pi_T(a|s)`` at the action's own ``T``, on-policy), ``"compensated"`` (the same, times each
+        action's ``T``: on-policy, and per unit of preference the log-prob update's size at any ``T``,
+        ``A * (1[a] - pi_T(.|s))`` for a softmax; the entropy bonus likewise; for a Gaussian the same
+        as ``"tempered"``) or ``"preference"`` (eq. 10 literally, lifted
         to function approximation as the critics' updates are: ``A * grad p(s, a)``, the taken
         action's preference alone; ``Discrete`` actions only)
     :param min_temperature: floor of the interest temperature; keeps the policy from freezing

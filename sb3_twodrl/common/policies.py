@@ -170,13 +170,14 @@ class TwoDimPolicyMixin:
         """``V_R``, ``V_P``, ``I(s)`` (None without a head), the actor's score of ``actions`` and the
         entropy (eq. 10): the score is the log-probability under the raw preferences (``T = 1``), with
         ``score="tempered"`` the log-probability and entropy under the tempered distribution the
-        actions were drawn from (eq. 9, at ``inverse_temperature``), or with ``score="preference"``
-        the preference ``p(s, a)`` itself (``Discrete`` actions)."""
+        actions were drawn from (eq. 9, at ``inverse_temperature``), with ``score="compensated"`` the
+        same values with the temperature's ``1/T`` taken out of their gradient, or with
+        ``score="preference"`` the preference ``p(s, a)`` itself (``Discrete`` actions)."""
         latent_pi, values, punishment_values, predicted = self.evaluate_state(obs)
-        if score == "tempered":
+        if score in ("tempered", "compensated"):
             if inverse_temperature is None:
-                raise ValueError('score="tempered" needs the inverse temperatures the actions were drawn with')
-            distribution = self.tempered_distribution(latent_pi, inverse_temperature)
+                raise ValueError(f"score={score!r} needs the inverse temperatures the actions were drawn with")
+            distribution = self.tempered_distribution(latent_pi, inverse_temperature, score == "compensated")
         else:
             distribution = self._get_action_dist_from_latent(latent_pi)  # type: ignore[attr-defined]
         if score == "preference":
@@ -217,11 +218,16 @@ class TwoDimPolicyMixin:
             inverse *= interest > 0
         return inverse
 
-    def tempered_distribution(self, latent_pi: th.Tensor, inverse_temperature: np.ndarray | th.Tensor) -> Distribution:
+    def tempered_distribution(
+        self, latent_pi: th.Tensor, inverse_temperature: np.ndarray | th.Tensor, compensated: bool = False
+    ) -> Distribution:
         """Action distribution of eq. 9: preferences times ``1 / T``; a Gaussian's std (gSDE: its noise) times ``T``.
 
         gSDE's noise and std are linear in its latent features, so scaling the features by ``T``
-        scales both (the exploration matrix is left as sampled).
+        scales both (the exploration matrix is left as sampled). ``compensated``: the same
+        distribution, but gradients reach the preferences as if they were the tempered ones
+        (``d(p/T)/dp`` taken as 1), so any ``T * grad log pi_T`` is finite, also at ``1/T = 0``; a
+        Gaussian's gradients hold no ``1/T`` (``T`` scales the std, whose log it shifts) and are unchanged.
         """
         inverse = th.as_tensor(inverse_temperature, device=latent_pi.device).reshape(-1, 1)
         mean_actions = self.action_net(latent_pi)
@@ -231,7 +237,11 @@ class TwoDimPolicyMixin:
             return self.action_dist.proba_distribution(mean_actions, self.log_std - th.log(inverse))
         if self.preferences == "bounded":
             mean_actions = bounded_preferences(mean_actions, self.preference_bound)
-        return self.action_dist.proba_distribution(action_logits=mean_actions * inverse)  # type: ignore[call-arg]
+        if compensated:
+            logits = mean_actions.detach() * inverse + (mean_actions - mean_actions.detach())
+        else:
+            logits = mean_actions * inverse
+        return self.action_dist.proba_distribution(action_logits=logits)  # type: ignore[call-arg]
 
     def update_interest_scale(self, interest: np.ndarray, dones: np.ndarray) -> None:
         """``"relative"``/``"learned"``: fold one vectorised step's interest into the running scale."""

@@ -17,7 +17,8 @@ differ only in the 2D-RL arguments); an arm changes only these:
    bounded to an sd of 2.5 with the floor at 1 (exploratory, derived in ``docs/ablation.md``);
    ``paper_eq10`` and ``bound25_eq10``: ``paper`` and ``relative_bound25`` with eq. 10 taken
    literally (``actor_update="preference"``; exploratory); ``paper_tempered``: ``paper`` with the
-   policy gradient of the tempered policy that acted (``actor_update="tempered"``).
+   policy gradient of the tempered policy that acted (``actor_update="tempered"``);
+   ``paper_compensated``: the same times each action's ``T`` (``actor_update="compensated"``).
 
 The fixed arms run after the ``paper`` arm, whose mean temperature over all its learning steps
 (``mean_temperature`` of the rows, weighted by steps) they take unless ``--fixed-temperature`` is
@@ -47,8 +48,8 @@ from sb3_twodrl.experiments.intervals import mean_ci, wilson
 from sb3_twodrl.experiments.protocol import PRESETS, RunSpec, load_hyperparams
 
 _LOG_PROB_SCORE = {"actor_update": "log_prob"}
-"""The actor update every arm but ``paper_tempered`` and the eq. 10 arms ran with (the default): pinned, so
-that the arms keep their rows whatever the default becomes."""
+"""The actor update every arm but ``paper_tempered``, ``paper_compensated`` and the eq. 10 arms ran with
+(the default): pinned, so that the arms keep their rows whatever the default becomes."""
 
 ARMS: dict[str, tuple[str, dict[str, Any]]] = {
     "a2c": ("a2c", {}),
@@ -73,6 +74,7 @@ ARMS: dict[str, tuple[str, dict[str, Any]]] = {
     ),
     "paper_eq10": ("twoda2c", {"interest": "paper", "preferences": "raw", "actor_update": "preference"}),
     "paper_tempered": ("twoda2c", {"interest": "paper", "preferences": "raw", "actor_update": "tempered"}),
+    "paper_compensated": ("twoda2c", {"interest": "paper", "preferences": "raw", "actor_update": "compensated"}),
     "bound25_eq10": (
         "twoda2c",
         {
