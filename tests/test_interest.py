@@ -210,6 +210,22 @@ def test_the_tempered_update_at_temperature_one_is_the_log_prob_update(env_id: s
         th.testing.assert_close(tempered, raw, rtol=1e-6, atol=1e-7)
 
 
+@pytest.mark.parametrize("use_sde", [False, True])
+def test_for_a_gaussian_the_compensated_update_is_the_tempered_one(use_sde: bool) -> None:
+    """``T`` scales a Gaussian's std (gSDE: its noise), whose log-gradient holds no ``1/T``: the two
+    updates learn the same parameters at any temperature."""
+
+    def learned(actor_update: str) -> list[th.Tensor]:
+        model = TwoDimA2C(
+            "MlpPolicy", "Pendulum-v1", n_steps=8, temperature=0.5, use_sde=use_sde, actor_update=actor_update, seed=3
+        )
+        model.learn(64)
+        return [p.detach().clone() for p in model.policy.parameters()]
+
+    for compensated, tempered in zip(learned("compensated"), learned("tempered"), strict=True):
+        th.testing.assert_close(compensated, tempered, rtol=0, atol=0)
+
+
 @pytest.mark.parametrize("score", ["tempered", "compensated"])
 @pytest.mark.parametrize("temperature", [0.5, 2.0])
 def test_the_tempered_score_is_unbiased_under_the_drawing_distribution(temperature: float, score: str) -> None:
