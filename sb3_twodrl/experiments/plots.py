@@ -21,6 +21,9 @@ STYLE = {  # the paper: proposed method solid, conventional actor-critic dotted
     "a2c": {"label": "actor-critic (A2C)", "linestyle": ":", "color": "tab:blue"},
     "ppo": {"label": "PPO", "linestyle": "-.", "color": "tab:green"},
 }
+PAPER_WINDOWS = ((1, 150), (151, 400), (401, 700), (701, 1000))
+"""Epoch windows of the paper's statements (section 3.4.2): A2C on the detour after about 150 epochs,
+2D-RL's routes 50:50 before 400 and its goal rate 80-90% after 400, A2C's about 90% after 700."""
 FIGURES = [
     ("fig3_goal_rate.png", "goal_rate", "goal reaching probability (test)", (0.0, 1.0)),
     ("fig4_reward_per_step.png", "reward_per_step", "reward per step (test)", None),
@@ -112,6 +115,31 @@ def summary_table(df: pd.DataFrame, env_id: str = "", k: int | None = None, m: i
     return "\n".join(lines) + "\n"
 
 
+def window_table(df: pd.DataFrame, windows: tuple[tuple[int, int], ...] = PAPER_WINDOWS) -> str:
+    """Markdown table: per algorithm and epoch window (cut to the epochs run), each seed's mean over
+    the window, then mean ± 95% CI over seeds (a share undefined in a whole window leaves the seed out)."""
+    last = int(df["epoch"].max()) if len(df) else 0
+    spans = [(lo, min(hi, last)) for lo, hi in windows if lo <= last]
+    if not spans:
+        return "(no results)\n"
+    lines = [
+        "| algorithm | epochs | seeds | goal rate | reward per step | shortcut share | collision rate |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    metrics = [("goal_rate", ".2f"), ("reward_per_step", ".4f"), ("shortcut_share", ".2f"), ("collision_rate", ".2f")]
+    for algo in sorted(df["algo"].unique(), key=lambda a: a != "twoda2c"):
+        label = STYLE.get(algo, {"label": algo})["label"]
+        for lo, hi in spans:
+            window = df[(df["algo"] == algo) & df["epoch"].between(lo, hi)]
+            per_seed = window.groupby("seed")[[m for m, _ in metrics]].mean()
+            cells = []
+            for metric, fmt in metrics:
+                mean, half, n = mean_ci(per_seed[metric].to_numpy())
+                cells.append("n/a" if n == 0 else f"{mean:{fmt}} ± {half:{fmt}}" if n > 1 else f"{mean:{fmt}}")
+            lines.append(f"| {label} | {lo}-{hi} | {len(per_seed)} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def main(argv: list[str] | None = None) -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("csv", help="results.csv of the experiment runner")
@@ -124,3 +152,4 @@ def main(argv: list[str] | None = None) -> None:
     for path in make_figures(df, out, title=args.title or env_id):
         print(path)
     print(summary_table(df, env_id=env_id))
+    print(window_table(df))

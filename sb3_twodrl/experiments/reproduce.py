@@ -125,11 +125,12 @@ def reproduce(argv: list[str] | None = None) -> Path:
     df = collect_results(out)
     df.to_csv(out / "results.csv", index=False)
     if not args.no_plots:
-        from sb3_twodrl.experiments.plots import make_figures, summary_table
+        from sb3_twodrl.experiments.plots import make_figures, summary_table, window_table
 
         k, m = config["learn_episodes"], config["test_episodes"]
         make_figures(df, out, title=f"{args.env}: K={k}, M={m}, {df['seed'].nunique()} seeds")
-        (out / "summary.md").write_text(summary_table(df, env_id=args.env, k=k, m=m))
+        summary = summary_table(df, env_id=args.env, k=k, m=m) + "\nBy the paper's epoch windows:\n\n"
+        (out / "summary.md").write_text(summary + window_table(df))
     print(f"results: {out / 'results.csv'} ({len(df)} rows)")
     return out
 
