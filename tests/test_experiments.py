@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import inspect
 import multiprocessing as mp
 import os
 import signal
@@ -13,6 +14,7 @@ import pytest
 from gymnasium.vector import AutoresetMode, SyncVectorEnv
 
 import envs  # noqa: F401  (registers the IDs)
+from sb3_twodrl import TwoDimA2C
 from sb3_twodrl.experiments import RunSpec, VectorEnvAdapter, algo_class, make_train_env, run_pair
 from sb3_twodrl.experiments import runner as runner_module
 from sb3_twodrl.experiments.runner import checkpoint_path, progress_path
@@ -77,6 +79,21 @@ def test_checkpoint_of_another_protocol_is_refused(tmp_path):
     run_pair(s)
     with pytest.raises(ValueError, match="another protocol"):
         run_pair(replace(s, learn_episodes=9))
+
+
+def test_checkpoint_made_under_other_class_defaults_is_refused(tmp_path, monkeypatch):
+    """A run resumed after a release changed a default it relied on would mix two algorithms' rows."""
+    s = spec(tmp_path, "twoda2c", checkpoint_every=1)
+    run_pair(replace(s, epochs=2))  # checkpoints epoch 1
+    assert s.protocol()["defaults"]["actor_update"] == repr(
+        inspect.signature(TwoDimA2C).parameters["actor_update"].default
+    )
+    assert "gamma" not in s.protocol()["defaults"]  # set by the hyperparameters
+    signature = inspect.signature(TwoDimA2C.__init__)
+    changed = [p.replace(default=0.25) if p.name == "min_temperature" else p for p in signature.parameters.values()]
+    monkeypatch.setattr(TwoDimA2C.__init__, "__signature__", signature.replace(parameters=changed), raising=False)
+    with pytest.raises(ValueError, match="another protocol"):
+        run_pair(s)
 
 
 def test_adapter_splits_masked_infos_and_marks_episode_ends():

@@ -6,6 +6,7 @@ with other random numbers; S seeds per algorithm.
 
 from __future__ import annotations
 
+import inspect
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -22,6 +23,20 @@ PRESETS: dict[str, dict[str, int]] = {
     "paper": {"epochs": 1000, "learn_episodes": 1000, "test_episodes": 100, "seeds": 5},
 }
 _ZOO_ONLY = ("n_timesteps", "callback", "normalize", "env_wrapper", "vec_env_wrapper", "frame_stack")
+_NOT_SETTINGS = ("policy", "env", "verbose", "seed", "device", "tensorboard_log", "_init_setup_model")
+
+
+def class_defaults(algo: str, hyperparams: dict[str, Any]) -> dict[str, str]:
+    """The constructor defaults of ``algo``'s class that ``hyperparams`` leave in force, as ``repr``:
+    a run resumed after a default changed (a new release) is then refused, not mixed."""
+    from sb3_twodrl.experiments.algos import algo_class
+
+    parameters = inspect.signature(algo_class(algo).__init__).parameters.values()
+    return {
+        p.name: repr(p.default)
+        for p in parameters
+        if p.default is not p.empty and p.name not in _NOT_SETTINGS and p.name not in hyperparams
+    }
 
 
 @dataclass
@@ -64,10 +79,12 @@ class RunSpec:
         return f"{self.algo}_seed{self.seed}"
 
     def protocol(self) -> dict[str, Any]:
-        """What a checkpoint must agree on to be resumed by this spec (all but paths, length and outputs)."""
+        """What a checkpoint must agree on to be resumed by this spec (all but paths, length and outputs),
+        the algorithm's defaults in force included."""
         keep = ("env_id", "algo", "seed", "learn_episodes", "test_episodes", "vec_env", "env_kwargs")
         out = {k: v for k, v in asdict(self).items() if k in keep}
         out["hyperparams"] = {k: repr(v) for k, v in sorted(self.hyperparams.items())}
+        out["defaults"] = class_defaults(self.algo, self.hyperparams)
         return out
 
 
