@@ -53,10 +53,10 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
         greedy actions get)
     :param preference_bound: the largest sd over the actions of ``"bounded"`` preferences
     :param interest_coef: loss weight of the ``"learned"`` mode's interest head (its target is ``delta+``)
-    :param actor_update: what the utility corrects: ``"log_prob"`` (default: the policy gradient of
-        the untempered softmax, ``A * grad log pi(a|s)``: off-policy at ``T != 1``), ``"tempered"``
+    :param actor_update: what the utility corrects: ``"log_prob"`` (the policy gradient of the
+        untempered softmax, ``A * grad log pi(a|s)``: off-policy at ``T != 1``), ``"tempered"``
         (the policy gradient of the tempered policy that drew the action, eq. 9: ``A * grad log
-        pi_T(a|s)`` at the action's own ``T``, on-policy), ``"compensated"`` (the same, times each
+        pi_T(a|s)`` at the action's own ``T``, on-policy), ``"compensated"`` (default: the same, times each
         action's ``T``: on-policy, and per unit of preference the log-prob update's size at any ``T``,
         ``A * (1[a] - pi_T(.|s))`` for a softmax; the entropy bonus likewise; for a Gaussian the same
         as ``"tempered"``) or ``"preference"`` (eq. 10 literally, lifted
@@ -111,7 +111,7 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
         preferences: str = "raw",
         preference_bound: float = 1.0,
         interest_coef: float = 0.5,
-        actor_update: str = "log_prob",
+        actor_update: str = "compensated",
         _init_setup_model: bool = True,
     ):
         if actor_update not in ACTOR_UPDATES:

@@ -11,7 +11,8 @@ differ only in the 2D-RL arguments); an arm changes only these:
    (``tests/test_equivalence.py``), with ``temperature`` set to the ``paper`` arm's mean temperature.
 3. ``twod_fixed``: TwoDimA2C (two critics, the utility) at that fixed temperature: no interest.
 4. ``paper``: TwoDimA2C, eq. 9 as the paper writes it (``interest="paper", preferences="raw"``),
-   with the default actor update ``"log_prob"``, pinned (arms 2-5 and the relative ones too).
+   with the actor update ``"log_prob"`` (the default until ``"compensated"``), pinned (arms 2-5 and
+   the relative ones too).
 5. ``relative_bounded``, ``relative_raw``, ``learned_bounded``: the options of
    :mod:`sb3_twodrl.common.interest`; ``relative_bound25``: the relative interest on preferences
    bounded to an sd of 2.5 with the floor at 1 (exploratory, derived in ``docs/ablation.md``);
@@ -49,7 +50,7 @@ from sb3_twodrl.experiments.protocol import PRESETS, RunSpec, load_hyperparams
 
 _LOG_PROB_SCORE = {"actor_update": "log_prob"}
 """The actor update every arm but ``paper_tempered``, ``paper_compensated`` and the eq. 10 arms ran with
-(the default): pinned, so that the arms keep their rows whatever the default becomes."""
+(the default then): pinned, so that the arms keep their rows whatever the default becomes."""
 
 ARMS: dict[str, tuple[str, dict[str, Any]]] = {
     "a2c": ("a2c", {}),
