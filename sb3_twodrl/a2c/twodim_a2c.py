@@ -20,7 +20,7 @@ from sb3_twodrl.common.splitting import RewardSplit
 
 SelfTwoDimA2C = TypeVar("SelfTwoDimA2C", bound="TwoDimA2C")
 
-ACTOR_UPDATES = ("log_prob", "tempered", "compensated", "preference")
+ACTOR_UPDATES = ("log_prob", "tempered", "compensated", "compensated_skip_uniform", "preference")
 
 
 class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
@@ -59,7 +59,9 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
         pi_T(a|s)`` at the action's own ``T``, on-policy), ``"compensated"`` (default: the same, times each
         action's ``T``: on-policy, and per unit of preference the log-prob update's size at any ``T``,
         ``A * (1[a] - pi_T(.|s))`` for a softmax; the entropy bonus likewise; for a Gaussian the same
-        as ``"tempered"``) or ``"preference"`` (eq. 10 literally, lifted
+        as ``"tempered"``), ``"compensated_skip_uniform"`` (the same, but no update from an episode's
+        uniform first move, ``1/T = 0``, where ``"compensated"`` gives ``A * (1[a] - 1/4)`` whatever
+        the policy) or ``"preference"`` (eq. 10 literally, lifted
         to function approximation as the critics' updates are: ``A * grad p(s, a)``, the taken
         action's preference alone; ``Discrete`` actions only)
     :param min_temperature: floor of the interest temperature; keeps the policy from freezing

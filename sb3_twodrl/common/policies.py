@@ -171,19 +171,25 @@ class TwoDimPolicyMixin:
         entropy (eq. 10): the score is the log-probability under the raw preferences (``T = 1``), with
         ``score="tempered"`` the log-probability and entropy under the tempered distribution the
         actions were drawn from (eq. 9, at ``inverse_temperature``), with ``score="compensated"`` the
-        same values with the temperature's ``1/T`` taken out of their gradient, or with
-        ``score="preference"`` the preference ``p(s, a)`` itself (``Discrete`` actions)."""
+        same values with the temperature's ``1/T`` taken out of their gradient, with
+        ``score="compensated_skip_uniform"`` those values but 0 for the actions drawn uniformly
+        (``1/T = 0``: the preferences played no part), or with ``score="preference"`` the preference
+        ``p(s, a)`` itself (``Discrete`` actions)."""
         latent_pi, values, punishment_values, predicted = self.evaluate_state(obs)
-        if score in ("tempered", "compensated"):
+        if score in ("tempered", "compensated", "compensated_skip_uniform"):
             if inverse_temperature is None:
                 raise ValueError(f"score={score!r} needs the inverse temperatures the actions were drawn with")
-            distribution = self.tempered_distribution(latent_pi, inverse_temperature, score == "compensated")
+            distribution = self.tempered_distribution(latent_pi, inverse_temperature, score != "tempered")
         else:
             distribution = self._get_action_dist_from_latent(latent_pi)  # type: ignore[attr-defined]
         if score == "preference":
             taken = self.action_net(latent_pi).gather(1, actions.long().view(-1, 1)).flatten()
             return values, punishment_values, predicted, taken, distribution.entropy()
-        return values, punishment_values, predicted, distribution.log_prob(actions), distribution.entropy()
+        log_prob, entropy = distribution.log_prob(actions), distribution.entropy()
+        if score == "compensated_skip_uniform":
+            drawn = (th.as_tensor(inverse_temperature, device=log_prob.device).reshape(-1) > 0).to(log_prob.dtype)
+            log_prob, entropy = log_prob * drawn, None if entropy is None else entropy * drawn
+        return values, punishment_values, predicted, log_prob, entropy
 
     def predict_critics(self, obs: PyTorchObs) -> tuple[th.Tensor, th.Tensor]:
         """Reward critic ``V_R(s)`` and punishment critic ``V_P(s)`` (eq. 3, 4)."""
