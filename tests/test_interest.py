@@ -184,7 +184,7 @@ def test_eq10_corrects_a_near_certain_crash(actor_update: str, corrected: bool) 
         np.testing.assert_allclose(after.numpy(), before.numpy(), atol=1e-5)
 
 
-@pytest.mark.parametrize("actor_update", ["preference", "tempered", "compensated"])
+@pytest.mark.parametrize("actor_update", ["preference", "tempered", "compensated", "compensated_skip_uniform"])
 def test_the_actor_update_is_saved_and_checked(actor_update: str, tmp_path: Any) -> None:
     model = TwoDimA2C("MlpPolicy", LatticeCorridor(), actor_update=actor_update)
     model.save(tmp_path / "m.zip")
@@ -274,7 +274,24 @@ def test_the_compensated_score_moves_preferences_by_one_hot_minus_the_drawing_di
     th.testing.assert_close(score_gradient("tempered"), inverse_temperature * (th.eye(4)[2] - probs))
 
 
-@pytest.mark.parametrize("score", ["tempered", "compensated"])
+def test_the_skip_uniform_score_is_the_compensated_one_but_for_uniform_moves() -> None:
+    """``1/T = 0`` (an episode's first move, drawn uniformly): no update; any other ``T``: the compensated one."""
+    policy = collapsed_model().policy
+    obs = th.as_tensor(np.repeat(np.eye(18, dtype=np.float32)[:1], 2, axis=0))
+    actions, inverse = th.tensor([2, 2]), th.tensor([0.0, 2.0])
+
+    def score_gradient(score: str, sample: int) -> th.Tensor:
+        policy.zero_grad()
+        *_, scores, entropy = policy.evaluate_actions_two_dim(obs, actions, score, inverse)
+        (scores[sample] + entropy[sample]).backward()
+        return th.cat([p.grad.flatten() for p in policy.parameters() if p.grad is not None])
+
+    assert score_gradient("compensated_skip_uniform", 0).abs().max() == 0
+    assert score_gradient("compensated", 0).abs().max() > 0
+    th.testing.assert_close(score_gradient("compensated_skip_uniform", 1), score_gradient("compensated", 1))
+
+
+@pytest.mark.parametrize("score", ["tempered", "compensated", "compensated_skip_uniform"])
 def test_the_tempered_score_needs_the_temperatures(score: str) -> None:
     policy = collapsed_model().policy
     with pytest.raises(ValueError, match="inverse temperatures"):
