@@ -56,10 +56,10 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
     :param actor_update: what the utility corrects: ``"log_prob"`` (the policy gradient of the
         untempered softmax, ``A * grad log pi(a|s)``: off-policy at ``T != 1``), ``"tempered"``
         (the policy gradient of the tempered policy that drew the action, eq. 9: ``A * grad log
-        pi_T(a|s)`` at the action's own ``T``, on-policy), ``"compensated"`` (default: the same, times each
+        pi_T(a|s)`` at the action's own ``T``, on-policy), ``"compensated"`` (the same, times each
         action's ``T``: on-policy, and per unit of preference the log-prob update's size at any ``T``,
         ``A * (1[a] - pi_T(.|s))`` for a softmax; the entropy bonus likewise; for a Gaussian the same
-        as ``"tempered"``), ``"compensated_skip_uniform"`` (the same, but no update from an episode's
+        as ``"tempered"``), ``"compensated_skip_uniform"`` (default: the same, but no update from an episode's
         uniform first move, ``1/T = 0``, where ``"compensated"`` gives ``A * (1[a] - 1/4)`` whatever
         the policy) or ``"preference"`` (eq. 10 literally, lifted
         to function approximation as the critics' updates are: ``A * grad p(s, a)``, the taken
@@ -113,7 +113,7 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
         preferences: str = "raw",
         preference_bound: float = 1.0,
         interest_coef: float = 0.5,
-        actor_update: str = "compensated",
+        actor_update: str = "compensated_skip_uniform",
         _init_setup_model: bool = True,
     ):
         if actor_update not in ACTOR_UPDATES:
