@@ -11,8 +11,8 @@ differ only in the 2D-RL arguments); an arm changes only these:
    (``tests/test_equivalence.py``), with ``temperature`` set to the ``paper`` arm's mean temperature.
 3. ``twod_fixed``: TwoDimA2C (two critics, the utility) at that fixed temperature: no interest.
 4. ``paper``: TwoDimA2C, eq. 9 as the paper writes it (``interest="paper", preferences="raw"``),
-   with the actor update ``"log_prob"`` (the default until ``"compensated"``), pinned (arms 2-5 and
-   the relative ones too).
+   with the actor update ``"log_prob"`` (the default before the compensated score), pinned (arms
+   2-5 and the relative ones too).
 5. ``relative_bounded``, ``relative_raw``, ``learned_bounded``: the options of
    :mod:`sb3_twodrl.common.interest`; ``relative_bound25``: the relative interest on preferences
    bounded to an sd of 2.5 with the floor at 1 (exploratory, derived in ``docs/ablation.md``);

@@ -24,6 +24,7 @@ STYLE = {  # the paper: proposed method solid, conventional actor-critic dotted
 PAPER_WINDOWS = ((1, 150), (151, 400), (401, 700), (701, 1000))
 """Epoch windows of the paper's statements (section 3.4.2): A2C on the detour after about 150 epochs,
 2D-RL's routes 50:50 before 400 and its goal rate 80-90% after 400, A2C's about 90% after 700."""
+TABLE_METRICS = (("goal_rate", ".2f"), ("reward_per_step", ".4f"), ("shortcut_share", ".2f"), ("collision_rate", ".2f"))
 FIGURES = [
     ("fig3_goal_rate.png", "goal_rate", "goal reaching probability (test)", (0.0, 1.0)),
     ("fig4_reward_per_step.png", "reward_per_step", "reward per step (test)", None),
@@ -85,6 +86,12 @@ def final_values(df: pd.DataFrame, last_fraction: float = 0.1) -> pd.DataFrame:
     return tail.groupby(["algo", "seed"])[metrics].mean().reset_index().assign(first_epoch=first)
 
 
+def _cell(values: np.ndarray, fmt: str) -> str:
+    """Mean ± 95% half-width over the finite values ("n/a" if none, the mean alone if one)."""
+    mean, half, n = mean_ci(values)
+    return "n/a" if n == 0 else f"{mean:{fmt}} ± {half:{fmt}}" if n > 1 else f"{mean:{fmt}}"
+
+
 def summary_table(df: pd.DataFrame, env_id: str = "", k: int | None = None, m: int | None = None) -> str:
     """Markdown table: end-of-run values, mean and 95% interval over seeds."""
     if df.empty:
@@ -101,15 +108,7 @@ def summary_table(df: pd.DataFrame, env_id: str = "", k: int | None = None, m: i
     ]
     for algo in sorted(fin["algo"].unique(), key=lambda a: a != "twoda2c"):
         f = fin[fin["algo"] == algo]
-        cells = []
-        for metric, fmt in [
-            ("goal_rate", ".2f"),
-            ("reward_per_step", ".4f"),
-            ("shortcut_share", ".2f"),
-            ("collision_rate", ".2f"),
-        ]:
-            mean, half, n = mean_ci(f[metric].to_numpy())
-            cells.append("n/a" if n == 0 else f"{mean:{fmt}} ± {half:{fmt}}" if n > 1 else f"{mean:{fmt}}")
+        cells = [_cell(f[metric].to_numpy(), fmt) for metric, fmt in TABLE_METRICS]
         label = STYLE.get(algo, {"label": algo})["label"]
         lines.append(f"| {label} | {f['seed'].nunique()} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
@@ -126,16 +125,12 @@ def window_table(df: pd.DataFrame, windows: tuple[tuple[int, int], ...] = PAPER_
         "| algorithm | epochs | seeds | goal rate | reward per step | shortcut share | collision rate |",
         "|---|---|---|---|---|---|---|",
     ]
-    metrics = [("goal_rate", ".2f"), ("reward_per_step", ".4f"), ("shortcut_share", ".2f"), ("collision_rate", ".2f")]
     for algo in sorted(df["algo"].unique(), key=lambda a: a != "twoda2c"):
         label = STYLE.get(algo, {"label": algo})["label"]
         for lo, hi in spans:
             window = df[(df["algo"] == algo) & df["epoch"].between(lo, hi)]
-            per_seed = window.groupby("seed")[[m for m, _ in metrics]].mean()
-            cells = []
-            for metric, fmt in metrics:
-                mean, half, n = mean_ci(per_seed[metric].to_numpy())
-                cells.append("n/a" if n == 0 else f"{mean:{fmt}} ± {half:{fmt}}" if n > 1 else f"{mean:{fmt}}")
+            per_seed = window.groupby("seed")[[m for m, _ in TABLE_METRICS]].mean()
+            cells = [_cell(per_seed[metric].to_numpy(), fmt) for metric, fmt in TABLE_METRICS]
             lines.append(f"| {label} | {lo}-{hi} | {len(per_seed)} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
