@@ -20,7 +20,8 @@ differ only in the 2D-RL arguments); an arm changes only these:
    literally (``actor_update="preference"``; exploratory); ``paper_tempered``: ``paper`` with the
    policy gradient of the tempered policy that acted (``actor_update="tempered"``);
    ``paper_compensated``: the same times each action's ``T`` (``actor_update="compensated"``);
-   ``paper_skip_uniform``: that without the update of an episode's uniform first move.
+   ``paper_skip_uniform``: that without the update of an episode's uniform first move;
+   ``relative_skip_uniform``: the relative interest on raw preferences with that update.
 
 The fixed arms run after the ``paper`` arm, whose mean temperature over all its learning steps
 (``mean_temperature`` of the rows, weighted by steps) they take unless ``--fixed-temperature`` is
@@ -80,6 +81,10 @@ ARMS: dict[str, tuple[str, dict[str, Any]]] = {
     "paper_skip_uniform": (
         "twoda2c",
         {"interest": "paper", "preferences": "raw", "actor_update": "compensated_skip_uniform"},
+    ),
+    "relative_skip_uniform": (
+        "twoda2c",
+        {"interest": "relative", "preferences": "raw", "actor_update": "compensated_skip_uniform"},
     ),
     "bound25_eq10": (
         "twoda2c",
