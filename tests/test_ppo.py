@@ -1,5 +1,6 @@
 """TwoDimPPO: 2D-RL on SB3's PPO."""
 
+import numpy as np
 import pytest
 import torch as th
 from stable_baselines3 import PPO
@@ -61,3 +62,73 @@ def test_logs_ppo_and_2d_keys() -> None:
     logged = model.logger.name_to_value
     for key in ("train/clip_fraction", "train/approx_kl", "train/punishment_value_loss", "train/interest"):
         assert key in logged, key
+
+
+def actor_parameters(model: TwoDimPPO) -> list[th.Tensor]:
+    return [
+        p.detach().clone()
+        for p in (*model.policy.mlp_extractor.policy_net.parameters(), *model.policy.action_net.parameters())
+    ]
+
+
+@pytest.mark.parametrize("actor_update", ["tempered", "compensated", "compensated_skip_uniform"])
+def test_tempered_ratios_at_temperature_one_reproduce_the_log_prob_run(actor_update: str) -> None:
+    """At a fixed ``T = 1`` the tempered policy is the raw one and no move is uniform: the same parameters."""
+    args = dict(temperature=1.0, seed=3, **PPO_ARGS)
+    raw = TwoDimPPO("MlpPolicy", cartpole(3), **args).learn(128)
+    tempered = TwoDimPPO("MlpPolicy", cartpole(3), actor_update=actor_update, **args).learn(128)
+    for name, tensor in raw.policy.state_dict().items():
+        th.testing.assert_close(tempered.policy.state_dict()[name], tensor, rtol=1e-6, atol=1e-7, msg=name)
+
+
+def rollout_log_ratios(model: TwoDimPPO, actor_update: str) -> th.Tensor:
+    """Each stored action's log-ratio under ``actor_update``'s score, with the rollout's policy."""
+    data = next(model.rollout_buffer.get(None))
+    with th.no_grad():
+        *_, log_prob, _ = model.policy.evaluate_actions_two_dim(
+            data.observations, data.actions.long().flatten(), actor_update, data.inverse_temperatures
+        )
+    return log_prob - data.old_log_prob
+
+
+@pytest.mark.parametrize("actor_update", ["log_prob", "tempered", "compensated", "compensated_skip_uniform"])
+def test_each_ratio_is_one_before_the_update(actor_update: str) -> None:
+    """``old_log_prob`` is stored under the policy the ratio compares: the raw one for ``"log_prob"``,
+    the tempered one that drew the actions otherwise; so with ``learning_rate=0`` (the policy stays
+    the rollout's) no ratio is clipped and the logged KL is 0, the uniform first moves included."""
+    model = TwoDimPPO("MlpPolicy", cartpole(0), learning_rate=0.0, actor_update=actor_update, seed=0, **PPO_ARGS)
+    with th.no_grad():
+        model.policy.action_net.bias.copy_(th.tensor([1.0, -1.0]))  # a policy with preferences to temper
+    model.learn(64)
+    logged = model.logger.name_to_value
+    assert logged["train/clip_fraction"] == 0 and abs(logged["train/approx_kl"]) < 1e-7
+    uniform = (model.rollout_buffer.inverse_temperatures == 0).sum()
+    assert uniform >= 2  # each env's first move
+    other = "tempered" if actor_update == "log_prob" else "log_prob"
+    assert rollout_log_ratios(model, other).abs().max() > 1e-3
+
+
+@pytest.mark.parametrize("actor_update", ["compensated", "compensated_skip_uniform"])
+def test_skip_uniform_takes_no_actor_step_from_uniform_moves(actor_update: str) -> None:
+    """A rollout drawn wholly uniformly (``1/T = 0``): the skip-uniform ratio gives the actor no
+    gradient (the critics still learn); the compensated one moves it."""
+    model = TwoDimPPO("MlpPolicy", cartpole(0), learning_rate=0.0, actor_update=actor_update, seed=0, **PPO_ARGS)
+    model.learn(64)
+    buffer = model.rollout_buffer
+    buffer.inverse_temperatures[:] = 0.0
+    buffer.log_probs[:] = np.log(0.5)  # the uniform policy over CartPole's two actions
+    model.lr_schedule = lambda _: 1e-3
+    model.policy.optimizer.state.clear()  # no Adam momentum from the rollout's updates at rate 0
+    actor, critic = actor_parameters(model), [p.detach().clone() for p in model.policy.value_net.parameters()]
+    model.train()
+    moved = any(not th.equal(a, b) for a, b in zip(actor, actor_parameters(model), strict=True))
+    assert moved == (actor_update == "compensated")
+    assert any(not th.equal(a, b) for a, b in zip(critic, model.policy.value_net.parameters(), strict=True))
+
+
+def test_actor_update_is_validated_and_saved(tmp_path) -> None:
+    with pytest.raises(ValueError, match="actor_update must be one of"):
+        TwoDimPPO("MlpPolicy", "CartPole-v1", actor_update="preference")
+    model = TwoDimPPO("MlpPolicy", "CartPole-v1", n_steps=16, batch_size=8, actor_update="compensated", seed=0)
+    model.save(tmp_path / "m.zip")
+    assert TwoDimPPO.load(tmp_path / "m.zip").actor_update == "compensated"

@@ -7,6 +7,7 @@ import torch as th
 from gymnasium import spaces
 from stable_baselines3 import PPO
 from stable_baselines3.common.buffers import RolloutBuffer
+from stable_baselines3.common.distributions import Distribution
 from stable_baselines3.common.policies import ActorCriticPolicy, BasePolicy
 from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedule
 from stable_baselines3.common.utils import explained_variance
@@ -19,6 +20,8 @@ from sb3_twodrl.common.splitting import RewardSplit
 from sb3_twodrl.ppo.policies import CnnPolicy, MlpPolicy, MultiInputPolicy
 
 SelfTwoDimPPO = TypeVar("SelfTwoDimPPO", bound="TwoDimPPO")
+
+ACTOR_UPDATES = ("log_prob", "tempered", "compensated", "compensated_skip_uniform")
 
 
 def _clipped(values: th.Tensor, old_values: th.Tensor, clip_range_vf: float | None) -> th.Tensor:
@@ -36,9 +39,10 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
     critic ``V_P`` (discount ``punishment_gamma``) learn the two evaluations (eq. 3-8), actions are
     drawn at the interest temperature of eq. 9. PPO's clipped surrogate is taken on the utility
     advantage ``A_R - punishment_weight * A_P`` (eq. 1 with GAE per stream; normalised per minibatch
-    if ``normalize_advantage``); the ratio is that of the raw preferences (``T = 1``, eq. 10). Each
-    critic regresses on its own TD(lambda) target and, with ``clip_range_vf``, is clipped around its
-    own rollout values.
+    if ``normalize_advantage``); by default the ratio is that of the raw preferences (``T = 1``,
+    eq. 10), with ``actor_update`` that of the tempered policy that drew the actions. Each critic
+    regresses on its own TD(lambda) target and, with ``clip_range_vf``, is clipped around its own
+    rollout values.
 
     Every argument of SB3's ``PPO`` keeps its meaning and default (``gamma`` discounts the reward
     stream); see ``PPO`` for them.
@@ -55,6 +59,12 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
     :param preferences: ``"raw"`` or ``"bounded"`` preferences (as ``TwoDimA2C``)
     :param preference_bound: the largest sd over the actions of ``"bounded"`` preferences
     :param interest_coef: loss weight of the ``"learned"`` mode's interest head
+    :param actor_update: whose ratio the surrogate clips: ``"log_prob"`` (default: the raw
+        preferences' at ``T = 1``, compared with themselves before the update), ``"tempered"`` (the
+        tempered policy ``pi_T`` that drew each action, the behaviour policy), ``"compensated"`` (that
+        ratio, its gradient times the action's ``T``, as ``TwoDimA2C``'s) or
+        ``"compensated_skip_uniform"`` (that, with ratio 1 and no gradient for an episode's uniform
+        first move, ``1/T = 0``)
     :param min_temperature: floor of the interest temperature
     :param max_temperature: ceiling of the interest temperature
     """
@@ -106,8 +116,12 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
         preferences: str = "raw",
         preference_bound: float = 1.0,
         interest_coef: float = 0.5,
+        actor_update: str = "log_prob",
         _init_setup_model: bool = True,
     ):
+        if actor_update not in ACTOR_UPDATES:
+            raise ValueError(f"actor_update must be one of {ACTOR_UPDATES}, got {actor_update!r}")
+        self.actor_update = actor_update
         policy = self._init_two_dim(
             policy,
             n_steps=n_steps,
@@ -157,6 +171,13 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
             _init_setup_model=_init_setup_model,
         )
 
+    def _rollout_log_probs(self, latent_pi: th.Tensor, distribution: Distribution, actions: th.Tensor) -> th.Tensor:
+        """``"log_prob"``: under the raw preferences (the mixin's); otherwise under the tempered
+        distribution that drew the action, so that the ratio is 1 at the first epoch."""
+        if self.actor_update == "log_prob":
+            return super()._rollout_log_probs(latent_pi, distribution, actions)
+        return distribution.log_prob(actions)
+
     def train(self) -> None:
         """PPO's epochs of minibatch updates: clipped surrogate on the utility, each critic on its own target."""
         self.policy.set_training_mode(True)
@@ -177,13 +198,16 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
                     actions = rollout_data.actions.long().flatten()
 
                 values, punishment_values, predicted, log_prob, entropy = self.policy.evaluate_actions_two_dim(
-                    rollout_data.observations, actions
+                    rollout_data.observations, actions, self.actor_update, rollout_data.inverse_temperatures
                 )
+                old_log_prob = rollout_data.old_log_prob
+                if self.actor_update == "compensated_skip_uniform":  # masked as the score is: ratio 1
+                    old_log_prob = old_log_prob * (rollout_data.inverse_temperatures > 0)
                 advantages = rollout_data.advantages
                 if self.normalize_advantage and len(advantages) > 1:  # SB3 GitHub issue #325
                     advantages = (advantages - advantages.mean()) / (advantages.std() + 1e-8)
 
-                ratio = th.exp(log_prob - rollout_data.old_log_prob)
+                ratio = th.exp(log_prob - old_log_prob)
                 policy_loss_1 = advantages * ratio
                 policy_loss_2 = advantages * th.clamp(ratio, 1 - clip_range, 1 + clip_range)
                 policy_loss = -th.min(policy_loss_1, policy_loss_2).mean()
@@ -215,7 +239,7 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
 
                 # Approximate reverse KL for early stopping (SB3 GitHub issue #417)
                 with th.no_grad():
-                    log_ratio = log_prob - rollout_data.old_log_prob
+                    log_ratio = log_prob - old_log_prob
                     approx_kl_div = th.mean((th.exp(log_ratio) - 1) - log_ratio).cpu().numpy()
                     approx_kl_divs.append(approx_kl_div)
                 if self.target_kl is not None and approx_kl_div > 1.5 * self.target_kl:
