@@ -21,7 +21,8 @@ differ only in the 2D-RL arguments); an arm changes only these:
    policy gradient of the tempered policy that acted (``actor_update="tempered"``);
    ``paper_compensated``: the same times each action's ``T`` (``actor_update="compensated"``);
    ``paper_skip_uniform``: that without the update of an episode's uniform first move;
-   ``relative_skip_uniform``: the relative interest on raw preferences with that update.
+   ``relative_skip_uniform``: the relative interest on raw preferences with that update;
+   ``twod_fixed_compensated``: ``twod_fixed`` with that update (at a fixed ``T`` no move is uniform).
 
 The fixed arms run after the ``paper`` arm, whose mean temperature over all its learning steps
 (``mean_temperature`` of the rows, weighted by steps) they take unless ``--fixed-temperature`` is
@@ -61,6 +62,7 @@ ARMS: dict[str, tuple[str, dict[str, Any]]] = {
         {"reward_split": "none", "punishment_weight": 0.0, "punishment_vf_coef": 0.0, **_LOG_PROB_SCORE},
     ),
     "twod_fixed": ("twoda2c", {**_LOG_PROB_SCORE}),
+    "twod_fixed_compensated": ("twoda2c", {"actor_update": "compensated_skip_uniform"}),
     "paper": ("twoda2c", {"interest": "paper", "preferences": "raw", **_LOG_PROB_SCORE}),
     "relative_bounded": ("twoda2c", {"interest": "relative", "preferences": "bounded", **_LOG_PROB_SCORE}),
     "relative_raw": ("twoda2c", {"interest": "relative", "preferences": "raw", **_LOG_PROB_SCORE}),
@@ -97,7 +99,7 @@ ARMS: dict[str, tuple[str, dict[str, Any]]] = {
         },
     ),
 }
-FIXED = ("a2c_fixed", "twod_fixed")
+FIXED = ("a2c_fixed", "twod_fixed", "twod_fixed_compensated")
 """Arms acting at a fixed temperature (that of the ``paper`` arm), raw preferences."""
 DEFAULT_ARMS = ("a2c", "a2c_fixed", "twod_fixed", "paper", "relative_bounded")
 METRICS = (
