@@ -75,6 +75,15 @@ def test_tiny_ablation_end_to_end(tmp_path: Path) -> None:
     assert (tmp_path / "table.md").read_text().count("\n") == 2 + 4 and (tmp_path / "ablation.png").exists()
 
 
+def test_a_fixed_arm_alone_runs_in_a_new_folder_at_the_given_temperature(tmp_path: Path) -> None:
+    out = tmp_path / "new"
+    argv = ["--out", str(out), "--seeds", "0", "--epochs", "1", "-K", "4", "-M", "3", "--backend", "serial"]
+    ablation.ablation([*argv, "--arms", "twod_fixed_compensated", "--fixed-temperature", "1.25"])
+    assert json.loads((out / "fixed_temperature.json").read_text())["temperature"] == 1.25
+    rows = collect_results(out / "twod_fixed_compensated")
+    assert rows["mean_temperature"].dropna().to_numpy() == pytest.approx(1.25, rel=1e-5)
+
+
 def test_the_figure_takes_arms_whose_every_seed_learned(tmp_path: Path) -> None:
     """10 of 10 seeds learned: the interval's upper end equals the mean up to rounding (no negative error bar)."""
     learned = [ablation.summarize_run(rows([0.2, 1.0, 1.0], [0.1, 0.1, 0.1])) for _ in range(10)]

@@ -4,7 +4,7 @@ actor that has collapsed onto driving into the wall back to the goal?
 ``tests.toy_envs.LatticeCorridor(6, 3)`` (60-step limit, 4 envs, gamma 0.9), the actor's bias set to
 ``lead`` for west (the wall at the start) before training, 20k steps; then 20 stochastic test episodes
 (goal, crash) and the greedy policy's outcome. Run from the repository root:
-``python docs/diagnostics/collapse_probe.py``.
+``PYTHONPATH=. python docs/diagnostics/collapse_probe.py``.
 """
 
 import itertools

@@ -285,6 +285,7 @@ def ablation(argv: list[str] | None = None) -> dict[str, list[dict[str, float]]]
         temperature = args.fixed_temperature
         if temperature is None:
             temperature = mean_temperature(collect_results(args.out / "paper"))
+        args.out.mkdir(parents=True, exist_ok=True)
         (args.out / "fixed_temperature.json").write_text(json.dumps({"temperature": temperature}))
         _run_arms(args, fixed, base, temperature)
     frames = {arm: collect_results(args.out / arm) for arm in args.arms}
