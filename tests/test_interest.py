@@ -99,13 +99,35 @@ def test_only_the_learned_mode_has_an_interest_head() -> None:
         assert (policy.interest_net is not None) == (mode == "learned")
 
 
-def collapsed_model(**kwargs: Any) -> TwoDimA2C:
-    """A model whose actor has collapsed onto driving into the wall (raw preference 30 for west)."""
+def collapsed_model(lead: float = 30.0, **kwargs: Any) -> TwoDimA2C:
+    """A model whose actor has collapsed onto driving into the wall (raw preference ``lead`` for west)."""
     env = make_vec_env(lambda: TimeLimit(LatticeCorridor(6, 3), 60), n_envs=4, seed=0)
     model = TwoDimA2C("MlpPolicy", env, gamma=0.9, seed=0, **kwargs)
     with th.no_grad():
-        model.policy.action_net.bias.copy_(th.tensor([0.0, 0.0, 0.0, 30.0]))
+        model.policy.action_net.bias.copy_(th.tensor([0.0, 0.0, 0.0, lead]))
     return model
+
+
+@pytest.mark.parametrize(
+    ("lead", "kwargs", "outcome"),
+    [
+        (5.0, dict(ent_coef=0.05), "goal"),
+        (30.0, dict(ent_coef=0.05), "collision"),
+        (30.0, dict(interest="relative", preferences="bounded"), "goal"),
+    ],
+)
+def test_recovery_from_a_collapsed_actor(lead: float, kwargs: dict, outcome: str) -> None:
+    """After 20k steps from an actor collapsed onto the wall (``docs/diagnostics/collapse_probe.py``,
+    seed 0), the greedy policy: the default comes back from a moderate lead (5, with the protocol's
+    entropy bonus) but not from the hard one (30: the alternatives at ~exp(-60) get no gradient);
+    bounded preferences come back from that too."""
+    model = collapsed_model(lead, **kwargs).learn(20_000)
+    env = TimeLimit(LatticeCorridor(6, 3), 60)
+    obs, _ = env.reset(seed=0)
+    terminated = truncated = False
+    while not (terminated or truncated):
+        obs, _, terminated, truncated, info = env.step(int(model.predict(obs, deterministic=True)[0]))
+    assert ("goal" if info["is_success"] else "collision" if terminated else "time limit") == outcome
 
 
 @pytest.mark.parametrize("interest", [1e-9, 1e-3, 1.0, 1e3])
