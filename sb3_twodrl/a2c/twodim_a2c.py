@@ -15,12 +15,12 @@ from torch.nn import functional as F
 from sb3_twodrl.a2c.policies import CnnPolicy, MlpPolicy, MultiInputPolicy
 from sb3_twodrl.common.buffers import TwoDimRolloutBuffer
 from sb3_twodrl.common.on_policy import TwoDimOnPolicyMixin
-from sb3_twodrl.common.policies import TwoDimActorCriticPolicy
+from sb3_twodrl.common.policies import TEMPERED_SCORES, TwoDimActorCriticPolicy
 from sb3_twodrl.common.splitting import RewardSplit
 
 SelfTwoDimA2C = TypeVar("SelfTwoDimA2C", bound="TwoDimA2C")
 
-ACTOR_UPDATES = ("log_prob", "tempered", "compensated", "compensated_skip_uniform", "preference")
+ACTOR_UPDATES = ("log_prob", *TEMPERED_SCORES, "preference")
 
 
 class TwoDimA2C(TwoDimOnPolicyMixin, A2C):

@@ -45,6 +45,9 @@ DEFAULT_TEMPERATURE: dict[str, Any] = dict(
 
 _GAUSSIANS = (DiagGaussianDistribution, StateDependentNoiseDistribution)
 
+TEMPERED_SCORES = ("tempered", "compensated", "compensated_skip_uniform")
+"""The scores of ``evaluate_actions_two_dim`` taken under the tempered distribution that drew the actions."""
+
 
 def check_temperature(temperature: str | float, min_temperature: float, max_temperature: float) -> None:
     """Raise ``ValueError`` unless the temperature settings keep eq. 9 finite."""
@@ -176,7 +179,7 @@ class TwoDimPolicyMixin:
         (``1/T = 0``: the preferences played no part), or with ``score="preference"`` the preference
         ``p(s, a)`` itself (``Discrete`` actions)."""
         latent_pi, values, punishment_values, predicted = self.evaluate_state(obs)
-        if score in ("tempered", "compensated", "compensated_skip_uniform"):
+        if score in TEMPERED_SCORES:
             if inverse_temperature is None:
                 raise ValueError(f"score={score!r} needs the inverse temperatures the actions were drawn with")
             distribution = self.tempered_distribution(latent_pi, inverse_temperature, score != "tempered")

@@ -15,13 +15,13 @@ from torch.nn import functional as F
 
 from sb3_twodrl.common.buffers import TwoDimRolloutBuffer
 from sb3_twodrl.common.on_policy import TwoDimOnPolicyMixin
-from sb3_twodrl.common.policies import TwoDimActorCriticPolicy
+from sb3_twodrl.common.policies import TEMPERED_SCORES, TwoDimActorCriticPolicy
 from sb3_twodrl.common.splitting import RewardSplit
 from sb3_twodrl.ppo.policies import CnnPolicy, MlpPolicy, MultiInputPolicy
 
 SelfTwoDimPPO = TypeVar("SelfTwoDimPPO", bound="TwoDimPPO")
 
-ACTOR_UPDATES = ("log_prob", "tempered", "compensated", "compensated_skip_uniform")
+ACTOR_UPDATES = ("log_prob", *TEMPERED_SCORES)
 
 
 def _clipped(values: th.Tensor, old_values: th.Tensor, clip_range_vf: float | None) -> th.Tensor:
