@@ -22,6 +22,7 @@ differ only in the 2D-RL arguments); an arm changes only these:
    ``paper_compensated``: the same times each action's ``T`` (``actor_update="compensated"``);
    ``paper_skip_uniform``: that without the update of an episode's uniform first move;
    ``relative_skip_uniform``: the relative interest on raw preferences with that update;
+   ``learned_skip_uniform``: the learned per-state interest on raw preferences with that update;
    ``twod_fixed_compensated``: ``twod_fixed`` with that update (at a fixed ``T`` no move is uniform).
 
 The fixed arms run after the ``paper`` arm, whose mean temperature over all its learning steps
@@ -87,6 +88,10 @@ ARMS: dict[str, tuple[str, dict[str, Any]]] = {
     "relative_skip_uniform": (
         "twoda2c",
         {"interest": "relative", "preferences": "raw", "actor_update": "compensated_skip_uniform"},
+    ),
+    "learned_skip_uniform": (
+        "twoda2c",
+        {"interest": "learned", "preferences": "raw", "actor_update": "compensated_skip_uniform"},
     ),
     "bound25_eq10": (
         "twoda2c",
