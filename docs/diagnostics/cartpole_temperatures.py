@@ -7,8 +7,8 @@ starts, drawn uniformly, excluded). Prints, per seed, the evaluation return and,
 the second quarter and the second half of training, the mean and 10/50/90% quantiles of ``T`` and the
 shares of actions at the floor and at the ceiling.
 
-    OMP_NUM_THREADS=1 PYTHONPATH=. python docs/diagnostics/cartpole_temperatures.py relative '{"interest": "relative"}'
-    OMP_NUM_THREADS=1 PYTHONPATH=. python docs/diagnostics/cartpole_temperatures.py fixed1 '{"temperature": 1.0}' '[0, 1, 2]'
+    PYTHONPATH=. python docs/diagnostics/cartpole_temperatures.py relative '{"interest": "relative"}'
+    PYTHONPATH=. python docs/diagnostics/cartpole_temperatures.py fixed1 '{"temperature": 1.0}' '[0, 1, 2]'
 """
 
 import json
