@@ -114,19 +114,21 @@ class EpisodeTracker:
         rewards: Sequence[float] | np.ndarray | None = None,
     ) -> list[EpisodeRecord]:
         """Account for one vectorised step; returns the records of the episodes that ended in it."""
-        finished: list[EpisodeRecord] = []
+        if rewards is not None:
+            self._returns += np.asarray(rewards, dtype=np.float64).reshape(self.n_envs)
+        self._lengths += 1
+        routes, collided, route_key = self._routes, self._collided, self._route_key
         for i, info in enumerate(infos):
-            if rewards is not None:
-                self._returns[i] += float(rewards[i])
-            self._lengths[i] += 1
             if "route" in info:
-                self._route_key[i] = True
-                if info["route"] is not None:
-                    self._routes[i] = str(info["route"])
+                route_key[i] = True
+                route = info["route"]
+                if route is not None:
+                    routes[i] = str(route)
             if "collision" in info:
-                self._collided[i] = bool(self._collided[i]) or bool(info["collision"])
-            if not dones[i]:
-                continue
+                collided[i] = bool(collided[i]) or bool(info["collision"])
+        finished: list[EpisodeRecord] = []
+        for i in np.flatnonzero(dones):
+            info = infos[i]
             ep_return, ep_length = float(self._returns[i]), int(self._lengths[i])
             episode = info.get("episode")
             if episode is not None:
@@ -137,12 +139,12 @@ class EpisodeTracker:
                     episode_return=ep_return,
                     length=ep_length,
                     success=None if success is None else bool(success),
-                    route=self._routes[i],
-                    collision=self._collided[i],
-                    has_route_key=self._route_key[i],
+                    route=routes[i],
+                    collision=collided[i],
+                    has_route_key=route_key[i],
                 )
             )
-            self.reset(i)
+            self.reset(int(i))
         return finished
 
 

@@ -251,10 +251,9 @@ class TwoDimOnPolicyMixin:
             interest = self._interest(rewards, punishments, critics, next_critics, dones)
             self.policy.update_interest_scale(interest, dones)
             # Bootstrap both critics on time-limit truncation, as SB3 does (GitHub issue #633)
-            for idx, done in enumerate(dones):
+            for idx in np.flatnonzero(dones):
                 if (
-                    done
-                    and infos[idx].get("terminal_observation") is not None
+                    infos[idx].get("terminal_observation") is not None
                     and infos[idx].get("TimeLimit.truncated", False)
                 ):
                     terminal_obs = self.policy.obs_to_tensor(infos[idx]["terminal_observation"])[0]

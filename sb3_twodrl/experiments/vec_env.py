@@ -62,15 +62,18 @@ class VectorEnvAdapter(VecEnv):
         return obs, rewards.astype(np.float32), dones, infos
 
     def _split_infos(self, info: dict[str, Any]) -> list[dict[str, Any]]:
-        keys = [k for k in info if not k.startswith("_") and k not in _FINAL_KEYS]
-        columns = [info[k].tolist() if isinstance(info[k], np.ndarray) else list(info[k]) for k in keys]
-        masks = [info.get(f"_{k}") for k in keys]
-        if all(m is None or bool(np.all(m)) for m in masks):
-            return [dict(zip(keys, row, strict=True)) for row in zip(*columns, strict=True)]
         infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
-        for key, column, mask in zip(keys, columns, masks, strict=True):
-            for i in range(self.num_envs) if mask is None else np.flatnonzero(mask):
-                infos[i][key] = column[i]
+        for key, values in info.items():
+            if key.startswith("_") or key in _FINAL_KEYS:
+                continue
+            column = values.tolist() if isinstance(values, np.ndarray) else list(values)
+            mask = info.get(f"_{key}")
+            if mask is None or bool(np.all(mask)):
+                for env_info, value in zip(infos, column, strict=True):
+                    env_info[key] = value
+            else:
+                for i in np.flatnonzero(mask):
+                    infos[i][key] = column[i]
         return infos
 
     def close(self) -> None:
