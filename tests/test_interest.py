@@ -99,6 +99,19 @@ def test_only_the_learned_mode_has_an_interest_head() -> None:
         assert (policy.interest_net is not None) == (mode == "learned")
 
 
+def test_a_fixed_temperature_has_no_interest_head() -> None:
+    """At a fixed temperature the interest sets nothing: no head, so nothing of it reaches the update
+    (its gradient would change the clipped norm), and the fixed-temperature controls are the same
+    whatever the interest mode."""
+    env = make_vec_env(lambda: TimeLimit(LatticeCorridor(6, 3), 60), n_envs=2, seed=0)
+    params = []
+    for mode in ("paper", "learned"):
+        model = TwoDimA2C("MlpPolicy", env, temperature=0.7, interest=mode, seed=0).learn(200)
+        assert model.policy.interest_net is None
+        params.append(th.nn.utils.parameters_to_vector(model.policy.parameters()))
+    th.testing.assert_close(params[0], params[1])
+
+
 def collapsed_model(lead: float = 30.0, **kwargs: Any) -> TwoDimA2C:
     """A model whose actor has collapsed onto driving into the wall (raw preference ``lead`` for west)."""
     env = make_vec_env(lambda: TimeLimit(LatticeCorridor(6, 3), 60), n_envs=4, seed=0)

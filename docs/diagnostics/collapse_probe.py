@@ -4,10 +4,11 @@ actor that has collapsed onto driving into the wall back to the goal?
 ``tests.toy_envs.LatticeCorridor(6, 3)`` (60-step limit, 4 envs, gamma 0.9), the actor's bias set to
 ``lead`` for west (the wall at the start) before training, 20k steps; then 20 stochastic test episodes
 (goal, crash) and the greedy policy's outcome. Run from the repository root:
-``PYTHONPATH=. python docs/diagnostics/collapse_probe.py``.
+``PYTHONPATH=. python docs/diagnostics/collapse_probe.py [SETTING ...]`` (default: every setting).
 """
 
 import itertools
+import sys
 import time
 
 import torch as th
@@ -21,6 +22,7 @@ SETTINGS = {
     "default (eq. 9, raw)": {},
     "relative, raw": {"interest": "relative"},
     "relative, bounded": {"interest": "relative", "preferences": "bounded"},
+    "learned, raw": {"interest": "learned"},
 }
 
 
@@ -42,7 +44,8 @@ def main() -> None:
     th.set_num_threads(1)
     print("| setting | lead | ent_coef | seed | stochastic goals / 20 | crashes / 20 | greedy | s |")
     print("|---|---|---|---|---|---|---|---|")
-    for (name, kwargs), lead, ent_coef, seed in itertools.product(SETTINGS.items(), (5.0, 30.0), (0.0, 0.05), range(3)):
+    chosen = {name: SETTINGS[name] for name in sys.argv[1:] or SETTINGS}
+    for (name, kwargs), lead, ent_coef, seed in itertools.product(chosen.items(), (5.0, 30.0), (0.0, 0.05), range(3)):
         start = time.time()
         env = make_vec_env(lambda: TimeLimit(LatticeCorridor(6, 3), 60), n_envs=4, seed=seed)
         model = TwoDimA2C("MlpPolicy", env, gamma=0.9, ent_coef=ent_coef, seed=seed, **kwargs)

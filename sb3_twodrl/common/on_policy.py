@@ -128,7 +128,7 @@ class TwoDimOnPolicyMixin:
             punishment_weight=self.punishment_weight,
         )
         super()._setup_model()  # type: ignore[misc]
-        if self.interest == "learned":
+        if self.interest == "learned" and self.temperature == "interest":  # at a fixed temperature no head is needed
             self.policy.add_interest_head()
         self.policy.set_temperature(
             self.temperature,
@@ -206,7 +206,7 @@ class TwoDimOnPolicyMixin:
             obs_tensor = obs_as_tensor(self._last_obs, self.device)
             latent_pi, values, punishment_values, predicted = self.policy.evaluate_state(obs_tensor)
         critics = flat(values), flat(punishment_values)
-        learned = self.interest == "learned"  # the state's own predicted interest, not the transition's into it
+        learned = self.policy.interest_net is not None  # the state's own interest, not the transition's into it
         inverse_temperature = self.policy.inverse_temperature(
             flat(predicted) if learned else self._interest_at_rollout_start()
         )
@@ -252,10 +252,7 @@ class TwoDimOnPolicyMixin:
             self.policy.update_interest_scale(interest, dones)
             # Bootstrap both critics on time-limit truncation, as SB3 does (GitHub issue #633)
             for idx in np.flatnonzero(dones):
-                if (
-                    infos[idx].get("terminal_observation") is not None
-                    and infos[idx].get("TimeLimit.truncated", False)
-                ):
+                if infos[idx].get("terminal_observation") is not None and infos[idx].get("TimeLimit.truncated", False):
                     terminal_obs = self.policy.obs_to_tensor(infos[idx]["terminal_observation"])[0]
                     with th.no_grad():
                         terminal_value, terminal_punishment_value = self.policy.predict_critics(terminal_obs)

@@ -117,7 +117,7 @@ class TwoDimPolicyMixin:
         check_temperature(temperature, min_temperature, max_temperature)
         check_interest_modes(interest, preferences)
         check_positive("preference_bound", preference_bound)
-        if interest == "learned" and getattr(self, "interest_net", None) is None:
+        if temperature == "interest" and interest == "learned" and getattr(self, "interest_net", None) is None:
             raise ValueError('interest="learned" needs the interest head: call add_interest_head() first')
         self.temperature = temperature
         self.min_temperature = min_temperature
