@@ -48,8 +48,10 @@ def test_floor_stops_interest_from_freezing_the_policy(biased_model: TwoDimA2C) 
     assert at_floor.max() < 1.0 - 1e-3
 
 
-def test_first_action_of_each_episode_is_uniform() -> None:
-    model = TwoDimA2C("MlpPolicy", LatticeCorridor(), n_steps=64, seed=0).learn(64)
+@pytest.mark.parametrize("interest", ["paper", "relative"])
+def test_first_action_of_each_episode_is_uniform(interest: str) -> None:
+    """Eq. 9's modes: an episode's first step has no transition into it, interest 0: uniform actions."""
+    model = TwoDimA2C("MlpPolicy", LatticeCorridor(), n_steps=64, interest=interest, seed=0).learn(64)
     buffer = model.rollout_buffer
     starts = buffer.episode_starts.astype(bool)
     assert starts.any() and (buffer.inverse_temperatures[starts] == 0).all()
@@ -148,10 +150,11 @@ def test_temperature_scales_the_gsde_noise(squash_output: bool) -> None:
 
 @pytest.mark.parametrize("use_sde", [False, True])
 def test_a_gaussian_at_interest_zero_takes_the_ceiling(use_sde: bool) -> None:
-    """An episode's first step (interest 0) is uniform for categorical actions; a Gaussian has no
-    uniform limit, so it acts at ``max_temperature``, the most random it can be, not at the floor."""
-    model = TwoDimA2C("MlpPolicy", "Pendulum-v1", use_sde=use_sde, max_temperature=8.0, seed=0)
+    """Eq. 9 (``interest="paper"``): an episode's first step (interest 0) is uniform for categorical
+    actions; a Gaussian has no uniform limit, so it acts at ``max_temperature``, the most random it
+    can be, not at the floor."""
+    model = TwoDimA2C("MlpPolicy", "Pendulum-v1", use_sde=use_sde, max_temperature=8.0, interest="paper", seed=0)
     inverse = model.policy.inverse_temperature(np.array([0.0, 2.0, 100.0], dtype=np.float32))
     np.testing.assert_allclose(inverse, [1 / 8.0, 1 / 2.0, 1 / 8.0])
-    categorical = TwoDimA2C("MlpPolicy", LatticeCorridor(), max_temperature=8.0, seed=0).policy
+    categorical = TwoDimA2C("MlpPolicy", LatticeCorridor(), max_temperature=8.0, interest="paper", seed=0).policy
     np.testing.assert_allclose(categorical.inverse_temperature(np.array([0.0, 2.0], dtype=np.float32)), [0.0, 0.5])
