@@ -33,16 +33,22 @@ def rollout_temperatures(interest: str, factor: float) -> np.ndarray:
     """Inverse temperatures of one seeded rollout with rewards and critics' outputs scaled by ``factor``."""
     env = make_vec_env(lambda: ScaledFeedback(TimeLimit(LatticeCorridor(5, 3), 40), factor), n_envs=2, seed=0)
     model = TwoDimA2C("MlpPolicy", env, n_steps=64, gamma=0.9, interest=interest, seed=0)
+    heads = [model.policy.value_net, model.policy.punishment_value_net]
+    if model.policy.interest_net is not None:  # the learned interest's estimate scales with what it predicts
+        heads.append(model.policy.interest_net)
     with th.no_grad():  # critics whose every output is `factor` times as large: every TD error scales
-        for head in (model.policy.value_net, model.policy.punishment_value_net):
+        for head in heads:
             head.weight.mul_(factor)
             head.bias.mul_(factor)
     model.learn(128)
     return model.rollout_buffer.inverse_temperatures.copy()
 
 
-def test_relative_interest_does_not_depend_on_the_reward_scale() -> None:
-    base, scaled = rollout_temperatures("relative", 1.0), rollout_temperatures("relative", 10.0)
+@pytest.mark.parametrize("interest", ["relative", "learned"])
+def test_relative_interest_does_not_depend_on_the_reward_scale(interest: str) -> None:
+    """Both modes divide by the running mean of ``delta+``: rewards, punishments and every
+    estimate ten times as large leave each temperature as it was."""
+    base, scaled = rollout_temperatures(interest, 1.0), rollout_temperatures(interest, 10.0)
     tempered = base[base > 0]
     assert np.unique(tempered).size > 10  # the interest, not a clamp, set most temperatures
     np.testing.assert_allclose(scaled, base, rtol=1e-4)
