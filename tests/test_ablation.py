@@ -90,3 +90,20 @@ def test_the_figure_takes_arms_whose_every_seed_learned(tmp_path: Path) -> None:
     frames = {"a2c": pd.DataFrame({"epoch": [1, 2, 3], "goal_rate": [0.2, 1.0, 1.0]})}
     ablation.figure(frames, {"a2c": learned}, tmp_path / "ablation.png")
     assert (tmp_path / "ablation.png").exists()
+
+
+def test_the_report_of_results_files_is_that_of_the_runs(tmp_path: Path) -> None:
+    """``--from-results`` rebuilds the table of earlier runs from their committed rows, without running."""
+    argv = ["--out", str(tmp_path / "run"), "--seeds", "0", "1", "--epochs", "2", "-K", "4", "-M", "3"]
+    runs = ablation.ablation([*argv, "--backend", "serial", "--arms", "a2c", "paper"])
+    paths = []
+    for arm in ("a2c", "paper"):
+        rows = collect_results(tmp_path / "run" / arm)
+        rows.insert(0, "arm", arm)
+        paths.append(tmp_path / f"{arm}.csv")
+        rows.to_csv(paths[-1], index=False)
+    again = ablation.ablation(["--out", str(tmp_path / "report"), "--from-results", *map(str, paths)])
+    assert json.dumps(again) == json.dumps(runs)  # NaN-aware
+    assert (tmp_path / "report" / "table.md").read_text() == (tmp_path / "run" / "table.md").read_text()
+    with pytest.raises(ValueError, match="more than one file"):
+        ablation.ablation(["--out", str(tmp_path / "twice"), "--from-results", str(paths[0]), str(paths[0])])

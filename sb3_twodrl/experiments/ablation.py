@@ -239,6 +239,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--backend", choices=("process", "ray", "serial"), default="process")
     p.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     p.add_argument("--gym-packages", nargs="*", default=["envs"], help="modules that register the env")
+    p.add_argument(
+        "--from-results",
+        nargs="+",
+        type=Path,
+        metavar="CSV",
+        help="no runs: the table and figure of these results files (an 'arm' column, one arm in one file only)",
+    )
     return p.parse_args(argv)
 
 
@@ -276,9 +283,43 @@ def _run_arms(args: argparse.Namespace, arms: list[str], base: dict, temperature
     run_grid(pending(specs), args.backend, args.workers)
 
 
+def frames_from_results(paths: list[Path]) -> dict[str, Any]:
+    """Per arm, its rows from results files with an ``arm`` column (as ``docs/figures/ablation_*_results.csv``).
+
+    :raises ValueError: if an arm's rows are in two files (label them apart first, e.g. by temperature)
+    """
+    import pandas as pd
+
+    frames: dict[str, Any] = {}
+    for path in paths:
+        df = pd.read_csv(path)
+        if "arm" not in df.columns:
+            raise ValueError(f"from_results: {path} has no 'arm' column")
+        for arm, rows in df.groupby("arm", sort=False):
+            if arm in frames:
+                raise ValueError(f"from_results: arm {arm!r} is in more than one file ({path} among them)")
+            frames[arm] = rows.sort_values(["seed", "epoch"]).reset_index(drop=True)
+    return frames
+
+
+def report(frames: dict[str, Any], out: Path) -> dict[str, list[dict[str, float]]]:
+    """Write ``table.md``, ``runs.json`` and ``ablation.png`` of ``frames`` under ``out``; the per-run summaries."""
+    runs = summaries(frames)
+    text = table(runs)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "table.md").write_text(text + "\n")
+    (out / "runs.json").write_text(json.dumps(runs, indent=1))
+    figure(frames, runs, out / "ablation.png")
+    print(text)
+    return runs
+
+
 def ablation(argv: list[str] | None = None) -> dict[str, list[dict[str, float]]]:
-    """Run (or resume) the arms of ``argv``; write ``table.md`` and ``ablation.png``; the per-run summaries."""
+    """Run (or resume) the arms of ``argv``, or read ``--from-results``; write ``table.md`` and
+    ``ablation.png``; the per-run summaries."""
     args = parse_args(argv)
+    if args.from_results:
+        return report(frames_from_results(args.from_results), args.out)
     for package in args.gym_packages:
         importlib.import_module(package)
     directory = Path(args.hyperparams_dir)
@@ -293,14 +334,7 @@ def ablation(argv: list[str] | None = None) -> dict[str, list[dict[str, float]]]
         args.out.mkdir(parents=True, exist_ok=True)
         (args.out / "fixed_temperature.json").write_text(json.dumps({"temperature": temperature}))
         _run_arms(args, fixed, base, temperature)
-    frames = {arm: collect_results(args.out / arm) for arm in args.arms}
-    runs = summaries(frames)
-    text = table(runs)
-    (args.out / "table.md").write_text(text + "\n")
-    (args.out / "runs.json").write_text(json.dumps(runs, indent=1))
-    figure(frames, runs, args.out / "ablation.png")
-    print(text)
-    return runs
+    return report({arm: collect_results(args.out / arm) for arm in args.arms}, args.out)
 
 
 def main(argv: list[str] | None = None) -> None:
