@@ -45,9 +45,10 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
         ``"cost"``, ``"sign"``, ``"none"`` (``r_R = r``, ``r_P = 0``) or a callable
         (see ``sb3_twodrl.common.splitting``)
     :param temperature: ``"interest"`` (eq. 9, ``T`` set by the interest) or a fixed positive temperature
-    :param interest: how the interest sets ``T``: ``"paper"`` (eq. 9 literally: ``T = delta+`` of the
-        transition into the state), ``"relative"`` (``delta+`` over its running mean) or ``"learned"``
-        (a head's ``E[delta+ | s]`` over the running mean of ``delta+``)
+    :param interest: how the interest sets ``T``: ``"learned"`` (default: a head's estimate of
+        ``E[delta+ | s]``, the state's "criticality", over the running mean of ``delta+``),
+        ``"paper"`` (eq. 9 literally: ``T = delta+`` of the transition into the state) or
+        ``"relative"`` (that ``delta+`` over its running mean)
     :param preferences: ``"raw"`` (eq. 9 literally) or ``"bounded"`` (preferences divided by
         ``max(1, their sd over the actions / preference_bound)``, so that ``min_temperature`` bounds how
         greedy actions get)
@@ -109,7 +110,7 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
         temperature: str | float = "interest",
         min_temperature: float = 0.5,
         max_temperature: float = 10.0,
-        interest: str = "paper",
+        interest: str = "learned",
         preferences: str = "raw",
         preference_bound: float = 1.0,
         interest_coef: float = 0.5,

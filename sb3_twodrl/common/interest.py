@@ -14,10 +14,12 @@ how eq. 9 keeps its meaning (README, "Design notes"):
   to the running mean of recent transitions' interest (:data:`INTEREST_SCALE_RATE`), so that
   ``T = 1`` means an ordinary surprise, whatever the size of the rewards or how settled the critics
   are. Clamped and 0 as in ``"paper"``.
-- ``"learned"``: ``T = I(s) / mean(delta+)``, ``I(s)`` a head of the critic network trained on the
-  ``delta+`` of the transitions out of ``s``: an estimate of ``E[delta+ | s]``, the paper's
-  "criticality" of a state, known before acting in it (eq. 9's ``delta+(t)`` depends on ``a(t)``
-  itself). Clamped; no uniform first step (the head has a value there).
+- ``"learned"`` (``TwoDimA2C``'s default): ``T = I(s) / mean(delta+)``, ``I(s)`` a head of the
+  critic network trained on the ``delta+`` of the transitions out of ``s``: an estimate of
+  ``E[delta+ | s]``, the paper's "criticality" of a state, known before acting in it (eq. 9's
+  ``delta+(t)`` depends on ``a(t)`` itself), and a smooth function of the state where the
+  transition's interest is one noisy draw. Clamped; no uniform first step (the head has a value
+  there); no head at a fixed temperature.
 
 ``preferences`` (what ``T`` divides, categorical actions only):
 
