@@ -203,19 +203,20 @@ def figure(frames: dict[str, Any], runs: dict[str, list[dict[str, float]]], path
     import matplotlib.pyplot as plt
 
     arms = [arm for arm, mine in runs.items() if mine]
+    palette = plt.get_cmap("tab10" if len(arms) <= 10 else "tab20")
     fig, axes = plt.subplots(1, len(METRICS) + 1, figsize=(3.6 * (len(METRICS) + 1), 3.6))
     for ax, key in zip(axes, METRICS, strict=False):
         for i, arm in enumerate(arms):
             mean, low, high, n = interval([r[key] for r in runs[arm]], count=key == "learned")
             if n:
                 error = None if math.isnan(low) else [[max(mean - low, 0.0)], [max(high - mean, 0.0)]]
-                ax.bar(i, mean, yerr=error, capsize=4, color=f"C{i}")
+                ax.bar(i, mean, yerr=error, capsize=4, color=palette(i))
         ax.set_xticks(range(len(arms)), arms, rotation=40, ha="right")
         ax.set_title(key)
     ax = axes[-1]
     for i, arm in enumerate(arms):
         curve = frames[arm].groupby("epoch")["goal_rate"].mean()
-        ax.plot(curve.index, curve.to_numpy(), color=f"C{i}", label=arm)
+        ax.plot(curve.index, curve.to_numpy(), color=palette(i), label=arm)
     ax.set_xlabel("epoch")
     ax.set_title("test goal rate (mean over seeds)")
     ax.legend(fontsize=7)
