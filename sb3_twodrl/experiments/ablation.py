@@ -106,7 +106,9 @@ ARMS: dict[str, tuple[str, dict[str, Any]]] = {
 }
 FIXED = ("a2c_fixed", "twod_fixed", "twod_fixed_compensated")
 """Arms acting at a fixed temperature (that of the ``paper`` arm), raw preferences."""
-DEFAULT_ARMS = ("a2c", "a2c_fixed", "twod_fixed", "paper", "relative_bounded")
+DEFAULT_ARMS = ("a2c", "a2c_fixed", "twod_fixed", "paper", "learned_skip_uniform")
+"""Issue 11's five arms: A2C, A2C and TwoDimA2C at the paper arm's mean temperature, eq. 9 as the paper
+writes it, and TwoDimA2C's default (``interest="learned"``, pinned so that the arm keeps its rows)."""
 METRICS = (
     "learned",
     "final_goal_rate",
