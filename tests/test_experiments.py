@@ -134,3 +134,22 @@ def test_cartpole_falls_back_to_per_env():
     """CartPole's registered vector env resets on the next step, which SB3 cannot use: auto picks DummyVecEnv."""
     assert type(make_train_env("CartPole-v1", 2, 0)).__name__ == "DummyVecEnv"
     assert type(make_train_env(ENV, 2, 0)) is VectorEnvAdapter
+
+
+def _check_config_repeatedly(out_dir: str, seed: int) -> None:
+    from sb3_twodrl.experiments.grid import check_config
+
+    config = {"env_id": "E", "epochs": 1, "learn_episodes": 1, "test_episodes": 1, "vec_env": "auto"}
+    for _ in range(300):
+        check_config(out_dir, {**config, "env_kwargs": {}, "hyperparams": {f"algo{seed}": {"x": "1"}}})
+
+
+def test_invocations_on_one_folder_never_read_a_half_written_config(tmp_path) -> None:
+    """Two invocations started together (e.g. one per seed) both read and write ``config.json``."""
+    ctx = mp.get_context("fork")
+    workers = [ctx.Process(target=_check_config_repeatedly, args=(str(tmp_path), i)) for i in range(2)]
+    for w in workers:
+        w.start()
+    for w in workers:
+        w.join(60)
+    assert [w.exitcode for w in workers] == [0, 0]

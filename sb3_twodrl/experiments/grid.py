@@ -70,7 +70,7 @@ def check_config(out_dir: str | Path, config: dict[str, Any]) -> None:
             raise ValueError(f"{out_dir} holds a run with other settings ({', '.join(diff)}); use another out dir")
         config = {**config, "hyperparams": {**old_hp, **config["hyperparams"]}}
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(config, indent=2, sort_keys=True))
+    atomic_write_bytes(path, json.dumps(config, indent=2, sort_keys=True).encode())  # another invocation may read it
 
 
 def pending(specs: list[RunSpec]) -> list[RunSpec]:
