@@ -62,3 +62,14 @@ def test_links_into_results_resolve() -> None:
                 if not (base / target).resolve().exists():
                     broken.append(f"{doc.relative_to(ROOT)}: `{target}`")
     assert broken == []
+
+
+def test_relative_links_in_the_docs_resolve() -> None:
+    broken = []
+    for doc in documents():
+        for target in LINK.findall(doc.read_text()):
+            path = target.split("#")[0]
+            if path and "://" not in path and not path.startswith("mailto:"):
+                if not (doc.parent / path).resolve().exists():
+                    broken.append(f"{doc.relative_to(ROOT)}: {target}")
+    assert broken == []
