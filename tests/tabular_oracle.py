@@ -76,8 +76,8 @@ class TabularActorCritic:
         next_state: int,
         terminated: bool,
         truncated: bool,
-    ) -> np.ndarray:
-        """One transition: TD errors (eq. 7-8), critics (eq. 5-6 as targets), actor (eq. 10); returns the deltas.
+    ) -> None:
+        """One transition: TD errors (eq. 7-8), critics (eq. 5-6 as targets), actor (eq. 10).
 
         A terminal step (``terminated``) has no successor value. A time-limit cut (``truncated``)
         bootstraps on the state it reached (``next_state``), as SB3 does. After either, the next
@@ -97,4 +97,3 @@ class TabularActorCritic:
             pi = softmax(self.preferences[state])  # the untempered policy, whose log-probability is differentiated
             self.preferences[state] += self.beta * utility * (np.eye(len(pi))[action] - pi)
         self.interest = 0.0 if terminated or truncated else float(np.abs(deltas).sum())
-        return deltas

@@ -190,6 +190,32 @@ def replay(oracle: TabularActorCritic, recorder: StepRecorder, two_streams: bool
     return worst | counts
 
 
+def test_oracle_is_eq_7_to_10_by_hand():
+    oracle = TabularActorCritic(
+        np.array([[0.0, 0.0, 0.0, 0.0], [1.27, 0.0, 0.0, 0.0]]),
+        np.array([[1.0, 2.0], [0.5, 0.2]]),  # V_R, V_P of states 0 and 1
+        gammas=(0.9, 0.1),
+        alphas=(0.5, 0.25),
+        signs=(1.0, -1.0),
+        beta=0.1,
+        actor_update="preference",
+        temperature="interest",
+        min_temperature=0.5,
+        max_temperature=10.0,
+    )
+    np.testing.assert_allclose(oracle.policy(1), 0.25)  # an episode's start: delta+ = 0, random actions
+    oracle.step(0, 2, (0.0, 0.01), 1, terminated=False, truncated=False)
+    # delta_R = 0 + 0.9 * 2 - 1 = 0.8, delta_P = 0.01 + 0.1 * 0.2 - 0.5 = -0.47 (eq. 7-8)
+    np.testing.assert_allclose(oracle.values[:, 0], [1.0 + 0.5 * 0.8, 0.5 - 0.25 * 0.47])
+    np.testing.assert_allclose(oracle.preferences[0], [0.0, 0.0, 0.1 * (0.8 + 0.47), 0.0])  # eq. 1, 10
+    e = np.exp(1.0)  # T = delta+ = 0.8 + 0.47 = 1.27 (eq. 2, 9)
+    np.testing.assert_allclose(oracle.policy(1), [e / (e + 3), 1 / (e + 3), 1 / (e + 3), 1 / (e + 3)])
+    oracle.step(1, 0, (5.0, 0.01), 0, terminated=True, truncated=False)  # no successor value
+    np.testing.assert_allclose(oracle.values[:, 1], [2.0 + 0.5 * 3.0, 0.2 - 0.25 * 0.19])
+    np.testing.assert_allclose(oracle.preferences[1, 0], 1.27 + 0.1 * 3.19)
+    np.testing.assert_allclose(oracle.policy(0), 0.25)  # the next episode starts at random
+
+
 @pytest.mark.parametrize(("env_id", "seed"), RUNS)
 def test_two_dim_a2c_is_the_papers_tabular_actor_critic(env_id, seed):
     model = tabular_two_dim_a2c(cell_env(env_id), seed)
