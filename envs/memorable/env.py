@@ -4,7 +4,7 @@ Each step's observation is one of the readings recorded at the robot's new cell,
 counter-based draw from the env's seeded key (so the batched env reproduces single envs), and a
 move collides where the map's swept-disc test says so or where it would enter a cell without
 recordings (the recorded free space). Rewards, ``info`` keys, time limit and the observation
-layout are those of ``NomadOffice-v0``.
+layout (``observation="cell"`` included) are those of ``NomadOffice-v0``.
 """
 
 from __future__ import annotations
@@ -60,8 +60,9 @@ class NomadOfficeMemorableEnv(NomadOfficeEnv):
         database: str | Path | SensorDatabase | None = None,
         observe_odometry: bool = True,
         render_mode: str | None = None,
+        observation: str = "sensors",
     ) -> None:
-        super().__init__(map, observe_odometry=observe_odometry, render_mode=render_mode)
+        super().__init__(map, observe_odometry=observe_odometry, render_mode=render_mode, observation=observation)
         self.replay = _Replay(self.core, database)
         self._moves = self.replay.moves
         self._offsets, self._counts = self.replay.offsets.tolist(), self.replay.database.counts.tolist()
@@ -90,12 +91,21 @@ class BatchedNomadOfficeMemorable(BatchedNomadOffice):
         database: str | Path | SensorDatabase | None = None,
         observe_odometry: bool = True,
         max_episode_steps: int = MAX_EPISODE_STEPS,
+        observation: str = "sensors",
     ) -> None:
-        super().__init__(num_envs, map, observe_odometry=observe_odometry, max_episode_steps=max_episode_steps)
+        super().__init__(
+            num_envs,
+            map,
+            observe_odometry=observe_odometry,
+            max_episode_steps=max_episode_steps,
+            observation=observation,
+        )
         self.replay = _Replay(self.core, database)
         self._moves = self.replay.moves
 
     def _observe(self, rows: np.ndarray) -> np.ndarray:
+        if self.observation == "cell":
+            return super()._observe(rows)
         cells = self._cell[rows]
         obs = self._obs_table[cells]
         obs[:, : sensors.N_READINGS] = self.replay.draw(cells, self._key[rows], self._t[rows])

@@ -1,9 +1,9 @@
 """N Nomad robots stepped in one numpy call, with the semantics of N ``NomadOffice-v0`` envs.
 
 :class:`BatchedNomadOffice` is a ``gymnasium.vector.VectorEnv`` (same-step autoreset) on the
-ideal lattice model, optionally with per-step sensor noise; sub-env ``i`` reset with seed ``s``
-behaves exactly like ``gym.make("envs:NomadOffice-v0")`` reset with seed ``s`` and reset again
-after every episode (same observations, rewards, terminations and truncations).
+ideal lattice model, optionally with per-step sensor noise or with ``observation="cell"``; sub-env
+``i`` reset with seed ``s`` behaves exactly like ``gym.make("envs:NomadOffice-v0")`` reset with seed
+``s`` and reset again after every episode (same observations, rewards, terminations and truncations).
 :class:`SB3VecEnvAdapter` exposes it to Stable-Baselines3 as a ``VecEnv``.
 """
 
@@ -54,13 +54,16 @@ class BatchedNomadOffice(VectorEnv):
         observe_odometry: bool = True,
         sensor_noise: bool | NoiseModel | None = None,
         max_episode_steps: int = MAX_EPISODE_STEPS,
+        observation: str = "sensors",
     ) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
             raise ValueError(f"num_envs must be a positive int, got {num_envs!r}")
         if isinstance(max_episode_steps, bool) or not isinstance(max_episode_steps, int) or max_episode_steps < 1:
             raise ValueError(f"max_episode_steps must be a positive int, got {max_episode_steps!r}")
-        template = NomadOfficeEnv(map, observe_odometry=observe_odometry, sensor_noise=sensor_noise)
-        self.core, self.noise = template.core, template.noise
+        template = NomadOfficeEnv(
+            map, observe_odometry=observe_odometry, sensor_noise=sensor_noise, observation=observation
+        )
+        self.core, self.noise, self.observation = template.core, template.noise, template.observation
         self.num_envs = int(num_envs)
         self.max_episode_steps = max_episode_steps
         self.single_observation_space = template.observation_space
@@ -69,7 +72,7 @@ class BatchedNomadOffice(VectorEnv):
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         odometry = self.core.odometry(self.core.lattice.cells)
         table = np.concatenate([self.core.readings, odometry], axis=1)
-        self._obs_table = np.ascontiguousarray(table[:, : self.single_observation_space.shape[0]])
+        self._obs_table = np.ascontiguousarray(table[:, : sensors.N_READINGS + (2 if observe_odometry else 0)])
         self._sd_table = None if self.noise is None else self.noise.sd(self.core.ranges)
         self._moves = self.core.lattice.moves  # move outcomes; a replay subclass swaps in the recorded free space
         self._step_reward = np.array([-MOVE_PUNISHMENT, GOAL_REWARD - MOVE_PUNISHMENT, -COLLISION_PUNISHMENT])
@@ -108,6 +111,8 @@ class BatchedNomadOffice(VectorEnv):
         return obs, self._info(np.zeros(self.num_envs), zeros, zeros)
 
     def _observe(self, rows: np.ndarray) -> np.ndarray:
+        if self.observation == "cell":
+            return self._cell[rows]  # fancy indexing: a copy
         cells = self._cell[rows]
         obs = self._obs_table[cells]
         if self.noise is not None:

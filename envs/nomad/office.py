@@ -29,6 +29,7 @@ GOAL_REWARD = 5.0  # r_R, eq. 11
 COLLISION_PUNISHMENT = 1.0  # r_P on collision, eq. 12
 MOVE_PUNISHMENT = 0.01  # r_P for every (non-colliding) move, eq. 12
 ROUTES: tuple[str | None, ...] = (None, "shortcut", "detour")
+OBSERVATIONS = ("sensors", "cell")
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 
 
@@ -123,6 +124,21 @@ def _sensor_noise(value: object) -> NoiseModel | None:
     raise TypeError(f"sensor_noise must be a bool, None or a NoiseModel, got {type(value).__name__}: {value!r}")
 
 
+def check_observation(observation: object, lattice: bool, env_name: str) -> str:
+    """``observation`` if it is one of :data:`OBSERVATIONS` that ``env_name`` can give, else ``ValueError``.
+
+    ``"cell"`` needs motion on the lattice (``lattice``): elsewhere the robot's pose is no cell.
+    """
+    if not isinstance(observation, str) or observation not in OBSERVATIONS:
+        raise ValueError(f"observation must be one of {OBSERVATIONS}, got {observation!r}")
+    if observation == "cell" and not lattice:
+        raise ValueError(
+            f"observation='cell' needs a robot that moves on the lattice, but {env_name} moves it off the lattice "
+            "(use observation='sensors', or the ideal model without step_sd_cm / slip_sd_cm)"
+        )
+    return observation
+
+
 def _non_negative(name: str, value: object) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float) or not np.isfinite(value) or value < 0:
         raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
@@ -133,8 +149,12 @@ class NomadOfficeEnv(gym.Env):
     """A Nomad 200 searching an office for the goal (paper section 3).
 
     Actions ``Discrete(4)``: 0 north, 1 east, 2 south, 3 west, 10 cm each, heading fixed north.
-    Observation: 32 normalised readings (16 sonar, then 16 IR; see :mod:`envs.nomad.sensors`)
-    followed by the normalised odometry position unless ``observe_odometry=False``.
+    Observation (``observation="sensors"``, the default): 32 normalised readings (16 sonar, then 16 IR;
+    see :mod:`envs.nomad.sensors`) followed by the normalised odometry position unless
+    ``observe_odometry=False``. ``observation="cell"``: ``Discrete(n_cells)``, the index of the robot's
+    lattice cell (``core.lattice.cells[i]`` is its centre), the task's Markov state, so that a
+    one-hot linear actor and critic are the paper's tables (``docs/tabular.md``); it needs lattice
+    motion (no ``step_sd_cm``/``slip_sd_cm``, not ``NomadOfficeReal-v0``) and a start on the lattice.
 
     Evaluations are eq. 11-12: ``r_R = 5`` on reaching the goal; ``r_P = 1`` on a collision
     (replacing the move cost) and ``0.01`` for every other move, the goal move included. The
@@ -167,6 +187,7 @@ class NomadOfficeEnv(gym.Env):
         step_sd_cm: float = 0.0,
         slip_sd_cm: float = 0.0,
         render_mode: str | None = None,
+        observation: str = "sensors",
     ) -> None:
         if not isinstance(observe_odometry, bool):
             raise TypeError(f"observe_odometry must be a bool, got {observe_odometry!r}")
@@ -176,12 +197,16 @@ class NomadOfficeEnv(gym.Env):
         self.noise = _sensor_noise(sensor_noise)
         self.step_sd_cm = _non_negative("step_sd_cm", step_sd_cm)
         self.slip_sd_cm = _non_negative("slip_sd_cm", slip_sd_cm)
+        self.observation = check_observation(observation, self._on_lattice_motion, type(self).__name__)
         self.observe_odometry = observe_odometry
         self.render_mode = render_mode
         self._moves = self.core.lattice.moves
         self._cell_odometry = self.core.odometry(self.core.lattice.cells)  # on the lattice, odometry is the cell's
-        dim = sensors.N_READINGS + (2 if observe_odometry else 0)
-        self.observation_space = spaces.Box(0.0, 1.0, shape=(dim,), dtype=np.float32)
+        if self.observation == "cell":
+            self.observation_space: spaces.Space = spaces.Discrete(len(self.core.lattice.cells))
+        else:
+            dim = sensors.N_READINGS + (2 if observe_odometry else 0)
+            self.observation_space = spaces.Box(0.0, 1.0, shape=(dim,), dtype=np.float32)
         self.action_space = spaces.Discrete(4)
         self._base_key = np.zeros(1, dtype=np.uint64)
         self._episode = -1
@@ -209,7 +234,9 @@ class NomadOfficeEnv(gym.Env):
             ranges = self.noise.apply(ranges, self._key, self._step)
         return sensors.normalise(ranges)[0]
 
-    def _observation(self) -> np.ndarray:
+    def _observation(self) -> np.ndarray | int:
+        if self.observation == "cell":
+            return self._cell
         readings = self._lattice_readings(self._cell) if self._cell >= 0 else self._pose_readings(self._pos)
         if not self.observe_odometry:
             return readings.copy()
@@ -219,7 +246,7 @@ class NomadOfficeEnv(gym.Env):
     # --- gymnasium API --------------------------------------------------------------------
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[np.ndarray, dict[str, Any]]:
+    ) -> tuple[np.ndarray | int, dict[str, Any]]:
         """Start an episode at the map's start, or at ``options["position"] = (x_cm, y_cm)``."""
         super().reset(seed=seed)
         if seed is not None or self._episode < 0:
@@ -245,6 +272,8 @@ class NomadOfficeEnv(gym.Env):
         """Checked position, lattice cell (-1 off the lattice or with noisy motion) and route code of a start."""
         pos = self._check_position(position)
         cell = self.core.lattice.index(pos) if self._on_lattice_motion else -1
+        if cell < 0 and self.observation == "cell":
+            raise ValueError(f"options['position'] {tuple(pos)} is not a lattice cell, which observation='cell' needs")
         return pos, cell, int(route_code_at(self.core.office, pos))
 
     @property
@@ -268,7 +297,7 @@ class NomadOfficeEnv(gym.Env):
             )
         return xy
 
-    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+    def step(self, action: Any) -> tuple[np.ndarray | int, float, bool, bool, dict[str, Any]]:
         """Move 10 cm; eq. 11-12 evaluations; terminate on collision or goal."""
         a = int(action)
         if not 0 <= a < 4:

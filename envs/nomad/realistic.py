@@ -386,10 +386,11 @@ class NomadOfficeRealEnv(NomadOfficeEnv):
         model: RealisticModel | None = None,
         observe_odometry: bool = True,
         render_mode: str | None = None,
+        observation: str = "sensors",
     ) -> None:
         if model is not None and not isinstance(model, RealisticModel):
             raise TypeError(f"model must be a RealisticModel or None, got {type(model).__name__}: {model!r}")
-        super().__init__(map, observe_odometry=observe_odometry, render_mode=render_mode)
+        super().__init__(map, observe_odometry=observe_odometry, render_mode=render_mode, observation=observation)
         self.model = RealisticModel() if model is None else model
         self.scene = self.model.scene(self.core.office)
 

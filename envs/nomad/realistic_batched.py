@@ -19,7 +19,7 @@ from envs import MAX_EPISODE_STEPS
 from envs.nomad import sensors
 from envs.nomad.batched import BatchedNomadOffice, SB3VecEnvAdapter, make_sb3_vec_env
 from envs.nomad.geometry import MOVES_CM, ROBOT_RADIUS_CM, swept_clearance
-from envs.nomad.office import COLLISION_PUNISHMENT, MOVE_PUNISHMENT, episode_keys, route_code_at
+from envs.nomad.office import COLLISION_PUNISHMENT, MOVE_PUNISHMENT, check_observation, episode_keys, route_code_at
 from envs.nomad.realistic import RealisticModel
 
 
@@ -34,7 +34,9 @@ class BatchedNomadOfficeReal(BatchedNomadOffice):
         model: RealisticModel | None = None,
         observe_odometry: bool = True,
         max_episode_steps: int = MAX_EPISODE_STEPS,
+        observation: str = "sensors",
     ) -> None:
+        check_observation(observation, False, type(self).__name__)
         if model is not None and not isinstance(model, RealisticModel):
             raise TypeError(f"model must be a RealisticModel or None, got {type(model).__name__}: {model!r}")
         super().__init__(num_envs, map, observe_odometry=observe_odometry, max_episode_steps=max_episode_steps)
