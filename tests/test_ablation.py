@@ -107,3 +107,16 @@ def test_the_report_of_results_files_is_that_of_the_runs(tmp_path: Path) -> None
     assert (tmp_path / "report" / "table.md").read_text() == (tmp_path / "run" / "table.md").read_text()
     with pytest.raises(ValueError, match="more than one file"):
         ablation.ablation(["--out", str(tmp_path / "twice"), "--from-results", str(paths[0]), str(paths[0])])
+
+
+def test_a_factorial_cell_changes_the_shared_settings_and_the_env_for_every_arm(tmp_path: Path) -> None:
+    argv = ["--out", str(tmp_path), "--seeds", "0", "--epochs", "1", "-K", "4", "-M", "3", "--backend", "serial"]
+    cell = ["--set", "ent_coef:0.01", "n_envs:2", "policy_kwargs:{'net_arch':[]}", "--env-kwargs", "observation:'cell'"]
+    ablation.ablation([*argv, "--arms", "a2c", "learned_skip_uniform", *cell])
+    for arm, algo in (("a2c", "a2c"), ("learned_skip_uniform", "twoda2c")):
+        config = json.loads((tmp_path / arm / "config.json").read_text())
+        assert config["env_kwargs"] == {"observation": "cell"}
+        settings = config["hyperparams"][algo]
+        assert (settings["ent_coef"], settings["n_envs"], settings["policy_kwargs"]) == ("0.01", "2", "{'net_arch': []}")
+    with pytest.raises(ValueError, match="--set"):
+        ablation.ablation([*argv, "--arms", "a2c", "--set", "ent_coef=0.01"])

@@ -50,7 +50,7 @@ import numpy as np
 
 from sb3_twodrl.experiments.grid import check_config, collect_results, pending, run_grid
 from sb3_twodrl.experiments.intervals import mean_ci, wilson
-from sb3_twodrl.experiments.protocol import PRESETS, RunSpec, load_hyperparams
+from sb3_twodrl.experiments.protocol import PRESETS, RunSpec, load_hyperparams, parse_env_kwargs
 
 _LOG_PROB_SCORE = {"actor_update": "log_prob"}
 """The actor update every arm but ``paper_tempered``, ``paper_compensated`` and the eq. 10 arms ran with
@@ -243,6 +243,14 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     p.add_argument("--gym-packages", nargs="*", default=["envs"], help="modules that register the env")
     p.add_argument(
+        "--set",
+        nargs="*",
+        default=[],
+        metavar="KEY:VALUE",
+        help="shared settings changed for every arm (a factor of a factorial), e.g. ent_coef:0.01 n_envs:1",
+    )
+    p.add_argument("--env-kwargs", nargs="*", metavar="KEY:VALUE", help="env arguments, e.g. observation:'cell'")
+    p.add_argument(
         "--from-results",
         nargs="+",
         type=Path,
@@ -254,6 +262,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def _run_arms(args: argparse.Namespace, arms: list[str], base: dict, temperature: float | None) -> None:
     specs = []
+    env_kwargs = parse_env_kwargs(args.env_kwargs)
     for arm in arms:
         algo, hp = arm_hyperparams(arm, base, temperature)
         out = args.out / arm
@@ -263,7 +272,7 @@ def _run_arms(args: argparse.Namespace, arms: list[str], base: dict, temperature
             "learn_episodes": args.learn_episodes,
             "test_episodes": args.test_episodes,
             "vec_env": "auto",
-            "env_kwargs": {},
+            "env_kwargs": env_kwargs,
             "hyperparams": {algo: {k: repr(v) for k, v in hp.items()}},
         }
         check_config(out, config)
@@ -280,6 +289,7 @@ def _run_arms(args: argparse.Namespace, arms: list[str], base: dict, temperature
                 gym_packages=list(args.gym_packages),
                 checkpoint_every=args.checkpoint_every,
                 tensorboard=False,
+                env_kwargs=env_kwargs,
             )
             for seed in args.seeds
         ]
@@ -326,7 +336,8 @@ def ablation(argv: list[str] | None = None) -> dict[str, list[dict[str, float]]]
     for package in args.gym_packages:
         importlib.import_module(package)
     directory = Path(args.hyperparams_dir)
-    base = {algo: load_hyperparams(directory / f"{algo}.yml", args.env) for algo in ("a2c", "twoda2c")}
+    shared = parse_env_kwargs(args.set, "--set")
+    base = {algo: {**load_hyperparams(directory / f"{algo}.yml", args.env), **shared} for algo in ("a2c", "twoda2c")}
     free = [arm for arm in args.arms if arm not in FIXED]
     fixed = [arm for arm in args.arms if arm in FIXED]
     _run_arms(args, free, base, None)

@@ -116,8 +116,9 @@ def load_hyperparams(path: str | Path, env_id: str, fallback_env_id: str = "Noma
     return entry
 
 
-def parse_env_kwargs(items: list[str] | None) -> dict[str, Any]:
-    """``["key:value", ...]`` (rl-zoo3's ``--env-kwargs`` format, values as Python literals) as a dict."""
+def parse_env_kwargs(items: list[str] | None, name: str = "env_kwargs") -> dict[str, Any]:
+    """``["key:value", ...]`` (rl-zoo3's ``--env-kwargs`` format, values as Python literals) as a dict;
+    ``name`` is the option named in the error."""
     import ast
 
     out: dict[str, Any] = {}
@@ -128,7 +129,7 @@ def parse_env_kwargs(items: list[str] | None) -> dict[str, Any]:
                 raise ValueError
             out[key] = ast.literal_eval(value)
         except (ValueError, SyntaxError):
-            raise ValueError(f"env_kwargs items must be key:value with a Python literal value, got {item!r}") from None
+            raise ValueError(f"{name} items must be key:value with a Python literal value, got {item!r}") from None
     return out
 
 
