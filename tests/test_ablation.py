@@ -117,6 +117,7 @@ def test_a_factorial_cell_changes_the_shared_settings_and_the_env_for_every_arm(
         config = json.loads((tmp_path / arm / "config.json").read_text())
         assert config["env_kwargs"] == {"observation": "cell"}
         settings = config["hyperparams"][algo]
-        assert (settings["ent_coef"], settings["n_envs"], settings["policy_kwargs"]) == ("0.01", "2", "{'net_arch': []}")
+        changed = (settings["ent_coef"], settings["n_envs"], settings["policy_kwargs"])
+        assert changed == ("0.01", "2", "{'net_arch': []}")
     with pytest.raises(ValueError, match="--set"):
         ablation.ablation([*argv, "--arms", "a2c", "--set", "ent_coef=0.01"])
