@@ -1,0 +1,74 @@
+"""The factorial's registered metrics and rules (docs/factorial.md) on rows whose answers are known."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from sb3_twodrl.experiments import factorial
+from sb3_twodrl.experiments.grid import COLUMNS
+
+
+def rows(seed: int, detour: list[float], shortcut_end: float = 1.0, reward: float = 0.28, algo: str = "a2c"):
+    """200 epochs: detour shares as given per epoch block, goal rate 1 from epoch 3."""
+    epochs = np.arange(1, 201)
+    detour_share = np.repeat(detour, 200 // len(detour))
+    detour_share[-20:] = 1.0 - shortcut_end
+    return pd.DataFrame(
+        {
+            "env": "NomadOffice-v0",
+            "algo": algo,
+            "seed": seed,
+            "epoch": epochs,
+            "learn_episodes": epochs * 1000,
+            "goal_rate": np.where(epochs >= 3, 1.0, 0.0),
+            "reward_per_step": reward,
+            "shortcut_share": 1.0 - detour_share,
+            "detour_share": detour_share,
+            "collision_rate": 0.0,
+            "interest_share": math.nan,
+            "mean_temperature": math.nan,
+            "env_steps": epochs * 20_000,
+            "wall_s": epochs * 0.5,
+        }
+    )[COLUMNS]
+
+
+def test_run_metrics_take_the_paper_windows() -> None:
+    df = rows(0, [0.9, 0.9, 0.9, 0.0], shortcut_end=0.75)  # detour 0.9 over epochs 1-150
+    df.loc[df["epoch"] == 10, "detour_share"] = math.nan  # an epoch with no labelled trial is left out
+    m = factorial.run_metrics(df)
+    assert m["early_detour_share"] == pytest.approx(0.9)
+    assert m["final_shortcut_share"] == pytest.approx(0.75) and m["final_detour_share"] == pytest.approx(0.25)
+    assert (m["learned"], m["epochs_to_half"], m["reward_per_step"]) == (1.0, 3.0, pytest.approx(0.28))
+
+
+def write_arm(folder: Path, frames: list[pd.DataFrame]) -> None:
+    (folder / "pairs").mkdir(parents=True)
+    for df in frames:
+        df.to_csv(folder / "pairs" / f"{df['algo'][0]}_seed{df['seed'][0]}.csv", index=False)
+
+
+def test_the_rules_turn_on_where_the_paper_result_is_and_off_where_it_is_not(tmp_path: Path) -> None:
+    rng = np.random.default_rng(0)
+    paper, ours = tmp_path / "paper_like", tmp_path / "ours"
+    write_arm(paper / "a2c", [rows(s, [0.95] * 3 + [0.9], shortcut_end=rng.uniform(0, 0.1)) for s in range(5)])
+    write_arm(
+        paper / "learned_skip_uniform",
+        [rows(s, [0.5], shortcut_end=rng.uniform(0.9, 1.0), algo="twoda2c") for s in range(5)],
+    )
+    write_arm(ours / "a2c", [rows(s, [0.0], reward=0.28 + rng.normal(0, 1e-3)) for s in range(5)])
+    write_arm(ours / "learned_skip_uniform", [rows(s, [0.0], algo="twoda2c") for s in range(5)])
+    cells = factorial.read_cells(tmp_path)
+    lines = factorial.verdicts(cells).splitlines()[2:]
+    assert [line.split("|")[1].strip() for line in lines] == ["ours", "paper_like"]
+    assert lines[0].rstrip(" |").endswith("False") and "| False |" in lines[0]
+    assert lines[1].rstrip(" |").endswith("True") and "| True |" in lines[1]
+    assert factorial.table(cells).count("\n") == 1 + 4
+
+
+def test_no_rows_is_an_error(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="runs"):
+        factorial.read_cells(tmp_path)
