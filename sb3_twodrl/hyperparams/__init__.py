@@ -11,6 +11,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+import yaml
+
 PACKAGED = ("a2c", "ppo", "twoda2c", "twodppo")
 """The algorithms this package ships a file for."""
 
@@ -36,8 +38,6 @@ def read_entry(path: str | os.PathLike, env_id: str) -> dict[str, Any]:
 
     :raises ValueError: if the file does not exist or has no entry for ``env_id``
     """
-    import yaml
-
     if not Path(path).is_file():
         raise ValueError(f"hyperparameter file {str(path)!r} does not exist")
     conf = yaml.safe_load(Path(path).read_text()) or {}
