@@ -15,13 +15,12 @@ Requires the ``zoo`` extra (rl-zoo3, optuna, pandas).
 from __future__ import annotations
 
 import importlib
-import os
 import sys
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
 from sb3_twodrl.a2c import TwoDimA2C
+from sb3_twodrl.hyperparams import PACKAGED, hyperparams_path
 from sb3_twodrl.ppo import TwoDimPPO
 
 __all__ = [
@@ -138,13 +137,14 @@ def _option_value(argv: list[str], *names: str) -> str | None:
 
 
 def prepare_zoo_argv(
-    argv: list[str], hyperparams_dir: str | os.PathLike | None = None, gym_packages: tuple[str, ...] = ("envs",)
+    argv: list[str], packaged_conf: bool = False, gym_packages: tuple[str, ...] = ("envs",)
 ) -> list[str]:
     """Make rl-zoo3's command line ready for this project (used by ``scripts/train.py`` and ``enjoy.py``).
 
     Registers ``twoda2c`` and ``twodppo`` (:func:`register_zoo`), imports ``gym_packages`` that are installed (so
-    ``--gym-packages envs`` is optional), and, when ``hyperparams_dir`` is given and no
-    ``-conf/--conf-file`` is, adds ``--conf-file <hyperparams_dir>/<algo>.yml`` if that file exists.
+    ``--gym-packages envs`` is optional), and, when ``packaged_conf`` and no ``-conf/--conf-file`` is given, adds
+    ``--conf-file`` with the packaged ``<algo>.yml`` (:func:`~sb3_twodrl.hyperparams.hyperparams_path`) of the
+    algos in :data:`~sb3_twodrl.hyperparams.PACKAGED`; the other algos keep rl-zoo3's own files.
     """
     register_zoo()
     for package in gym_packages:
@@ -153,11 +153,9 @@ def prepare_zoo_argv(
         except ImportError:
             pass
     argv = list(argv)
-    if hyperparams_dir is not None and not _has_option(argv, "-conf", "--conf-file"):
-        algo = _option_value(argv, "--algo") or "ppo"
-        conf = Path(hyperparams_dir) / f"{algo}.yml"
-        if conf.is_file():
-            argv += ["--conf-file", str(conf)]
+    algo = _option_value(argv, "--algo") or "ppo"
+    if packaged_conf and algo in PACKAGED and not _has_option(argv, "-conf", "--conf-file"):
+        argv += ["--conf-file", str(hyperparams_path(algo))]
     return argv
 
 

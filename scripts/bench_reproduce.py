@@ -27,10 +27,11 @@ import gymnasium as gym  # noqa: E402
 
 import envs  # noqa: E402, F401  (registers the IDs)
 from sb3_twodrl.experiments import PRESETS, RunSpec, load_hyperparams, run_pair  # noqa: E402
+from sb3_twodrl.hyperparams import hyperparams_path  # noqa: E402
 
 
 def measure(env_id: str, algo: str, n_envs: int, vec_env: str, args: argparse.Namespace) -> dict[str, float]:
-    hp = load_hyperparams(ROOT / "scripts" / "hyperparams" / f"{algo}.yml", env_id)
+    hp = load_hyperparams(hyperparams_path(algo), env_id)
     hp["n_envs"] = n_envs
     with tempfile.TemporaryDirectory() as out:
         spec = RunSpec(env_id, algo, args.seed, args.epochs, args.learn_episodes, args.test_episodes, hp, out)
@@ -61,7 +62,7 @@ def main() -> None:
     p.add_argument("--cores", type=int, default=2, help="cores of the projection")
     args = p.parse_args()
     arms = ("a2c", "twoda2c")
-    default_n = int(load_hyperparams(ROOT / "scripts" / "hyperparams" / "a2c.yml", args.env).get("n_envs", 1))
+    default_n = int(load_hyperparams(hyperparams_path("a2c"), args.env).get("n_envs", 1))
     configs = [("batched", n) for n in (args.n_envs or [default_n])]
     if args.dummy_n_envs:
         configs.append(("dummy", args.dummy_n_envs))

@@ -21,6 +21,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # run from a checkout without installing
 
 from sb3_twodrl.experiments import RunSpec, collect_results, load_hyperparams, run_grid  # noqa: E402
+from sb3_twodrl.hyperparams import hyperparams_path  # noqa: E402
 
 
 def main() -> None:
@@ -40,7 +41,7 @@ def main() -> None:
     args = p.parse_args()
     import envs  # noqa: F401  (registers the IDs)
 
-    base = load_hyperparams(ROOT / "scripts" / "hyperparams" / f"{args.algo}.yml", args.env)
+    base = load_hyperparams(hyperparams_path(args.algo), args.env)
     ent_coefs = args.ent_coefs or [base.get("ent_coef", 0.0)]
     points = list(itertools.product(args.n_envs, args.learning_rates, args.n_steps, ent_coefs))
     specs = []

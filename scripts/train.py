@@ -3,8 +3,9 @@
 
 Every rl-zoo3 option works (``--tensorboard-log``, ``--eval-freq``, ``--save-freq``, ``-optimize``,
 ``--storage``/``--study-name`` for an Optuna study shared by several machines, ``-params``, ...;
-see ``--help``). Hyperparameters default to ``scripts/hyperparams/<algo>.yml``; ``--conf-file``
-picks another file. The Nomad office envs are imported automatically when installed.
+see ``--help``). Hyperparameters default to the packaged ``<algo>.yml`` (:mod:`sb3_twodrl.hyperparams`)
+for a2c, ppo, twoda2c and twodppo, to rl-zoo3's own for other algos; ``--conf-file`` picks another file.
+The Nomad office envs are imported automatically when installed.
 """
 
 from __future__ import annotations
@@ -16,11 +17,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a check
 
 from sb3_twodrl.zoo import prepare_zoo_argv, run_zoo_entry
 
-HYPERPARAMS_DIR = Path(__file__).resolve().parent / "hyperparams"
-
 
 def main(argv: list[str] | None = None) -> None:
-    argv = prepare_zoo_argv(sys.argv[1:] if argv is None else argv, HYPERPARAMS_DIR)
+    argv = prepare_zoo_argv(sys.argv[1:] if argv is None else argv, packaged_conf=True)
     from rl_zoo3.train import train
 
     run_zoo_entry("train.py", argv, train)

@@ -6,7 +6,7 @@ from stable_baselines3.common.evaluation import evaluate_policy
 
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
 
-# rl-zoo3's PPO entry for CartPole-v1 (scripts/hyperparams/twodppo.yml), the 2D-RL arguments at their defaults
+# rl-zoo3's PPO entry for CartPole-v1 (sb3_twodrl/hyperparams/twodppo.yml), the 2D-RL arguments at their defaults
 PPO_CARTPOLE = dict(
     n_steps=32,
     batch_size=256,

@@ -11,6 +11,7 @@ pytest.importorskip("matplotlib")
 pytest.importorskip("yaml")
 
 from sb3_twodrl.experiments import COLUMNS, PRESETS, algo_class, reproduce
+from sb3_twodrl.hyperparams import hyperparams_path, read_entry
 
 ALGOS = ["twoda2c", "a2c"]
 
@@ -26,9 +27,21 @@ def without_wall(df: pd.DataFrame) -> pd.DataFrame:
 
 
 @pytest.fixture(scope="module")
-def process_run(tmp_path_factory):
+def toy_hp(tmp_path_factory) -> list[str]:
+    """``--hyperparams-dir`` of files that give the toy env the packaged NomadOffice-v0 entries."""
+    import yaml
+
+    folder = tmp_path_factory.mktemp("hyperparams")
+    for algo in ALGOS:
+        entry = read_entry(hyperparams_path(algo), "NomadOffice-v0")
+        (folder / f"{algo}.yml").write_text(yaml.safe_dump({ENV: entry}))
+    return ["--hyperparams-dir", str(folder)]
+
+
+@pytest.fixture(scope="module")
+def process_run(tmp_path_factory, toy_hp):
     out = tmp_path_factory.mktemp("process")
-    reproduce.reproduce([*COMMON, "--out", str(out), "--backend", "process", "--workers", "2"])
+    reproduce.reproduce([*COMMON, *toy_hp, "--out", str(out), "--backend", "process", "--workers", "2"])
     return out
 
 
@@ -54,43 +67,43 @@ def test_tiny_preset_writes_csv_figures_and_tensorboard(process_run):
     assert not list((process_run / "checkpoints").glob("*")), "a finished run leaves no checkpoint"
 
 
-def test_resume_skips_finished_pairs_and_redoes_only_missing(process_run, capsys):
+def test_resume_skips_finished_pairs_and_redoes_only_missing(process_run, toy_hp, capsys):
     pairs = sorted((process_run / "pairs").glob("*.csv"))
     stamps = {p: p.stat().st_mtime_ns for p in pairs}
     before = pd.read_csv(process_run / "results.csv")
     # Nothing left to do: no pair is run again, no row is duplicated.
-    reproduce.reproduce([*COMMON, "--out", str(process_run), "--backend", "serial", "--no-plots"])
+    reproduce.reproduce([*COMMON, *toy_hp, "--out", str(process_run), "--backend", "serial", "--no-plots"])
     assert f"{len(pairs)} of {len(pairs)}" in capsys.readouterr().out
     assert {p: p.stat().st_mtime_ns for p in pairs} == stamps
     pd.testing.assert_frame_equal(pd.read_csv(process_run / "results.csv"), before)
     # An interrupted grid: one pair missing. Only it runs again, and it gives the same rows (seeded).
     pair_path = process_run / "pairs" / f"a2c_seed{SEEDS[-1]}.csv"
     pair_path.unlink()
-    reproduce.reproduce([*COMMON, "--out", str(process_run), "--backend", "serial", "--no-plots"])
+    reproduce.reproduce([*COMMON, *toy_hp, "--out", str(process_run), "--backend", "serial", "--no-plots"])
     assert all(p.stat().st_mtime_ns == stamps[p] for p in pairs if p != pair_path)
     pd.testing.assert_frame_equal(without_wall(pd.read_csv(process_run / "results.csv")), without_wall(before))
 
 
-def test_resume_refuses_other_protocol(process_run):
+def test_resume_refuses_other_protocol(process_run, toy_hp):
     with pytest.raises(ValueError, match="other settings"):
-        reproduce.reproduce([*COMMON, "--out", str(process_run), "--epochs", "5", "--no-plots"])
+        reproduce.reproduce([*COMMON, *toy_hp, "--out", str(process_run), "--epochs", "5", "--no-plots"])
 
 
-def test_resume_accepts_an_added_algo(tmp_path):
+def test_resume_accepts_an_added_algo(tmp_path, toy_hp):
     base = ["--env", ENV, "--gym-packages", "tests.toy_nav", "--preset", "tiny", "--n-envs", "2", "--seed-list", "0"]
-    base += ["--no-progress", "--no-plots", "--backend", "serial", "--out", str(tmp_path)]
+    base += ["--no-progress", "--no-plots", "--backend", "serial", "--out", str(tmp_path), *toy_hp]
     reproduce.reproduce([*base, "--algos", "a2c"])
     reproduce.reproduce([*base, "--algos", *ALGOS])
     assert sorted(pd.read_csv(tmp_path / "results.csv")["algo"].unique()) == sorted(ALGOS)
     assert sorted(json.loads((tmp_path / "config.json").read_text())["hyperparams"]) == sorted(ALGOS)
 
 
-def test_ray_backend_gives_the_process_rows(process_run, tmp_path):
+def test_ray_backend_gives_the_process_rows(process_run, toy_hp, tmp_path):
     pytest.importorskip("ray")
     # Ray >= 2.x dropped local_mode; a local single-node Ray instance (one CPU) runs the same tasks instead.
     # One (algo, seed) pair keeps the test short; the runs are independent, so this is the backend's whole job.
     base = ["--env", ENV, "--gym-packages", "tests.toy_nav", "--preset", "tiny", "--n-envs", "2", "--no-progress"]
-    one = [*base, "--algos", "twoda2c", "--seed-list", SEEDS[-1], "--out", str(tmp_path), "--no-plots"]
+    one = [*base, *toy_hp, "--algos", "twoda2c", "--seed-list", SEEDS[-1], "--out", str(tmp_path), "--no-plots"]
     reproduce.reproduce([*one, "--backend", "ray", "--workers", "1"])
     ray_rows = without_wall(pd.read_csv(tmp_path / "results.csv"))
     process_rows = without_wall(pd.read_csv(process_run / "results.csv"))

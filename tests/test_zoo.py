@@ -13,6 +13,7 @@ import yaml
 
 import envs  # noqa: F401  (registers the Nomad office ids)
 import tests.toy_nav  # noqa: F401  (registers ToyNav-v0)
+from sb3_twodrl.hyperparams import hyperparams_path
 from sb3_twodrl.zoo import (
     ZOO_ALGOS,
     ZOO_SAMPLERS,
@@ -23,7 +24,6 @@ from sb3_twodrl.zoo import (
 )
 
 ROOT = Path(__file__).resolve().parents[1]
-HYPERPARAMS = ROOT / "scripts" / "hyperparams"
 ZOO_ENVS = ["NomadOffice-v0", "NomadOfficeMemorable-v0", "CartPole-v1", "Acrobot-v1"]
 ALGOS = ["a2c", "twoda2c", "ppo", "twodppo"]
 
@@ -64,13 +64,13 @@ def scalar_tags(tb_dir: Path) -> set[str]:
 
 def test_yaml_covers_the_envs_for_both_algorithms():
     for algo in ALGOS:
-        conf = yaml.safe_load((HYPERPARAMS / f"{algo}.yml").read_text())
+        conf = yaml.safe_load(hyperparams_path(algo).read_text())
         for env_id in ZOO_ENVS:
             assert env_id in conf, (algo, env_id)
             assert "sb3_twodrl.callbacks.NavigationMetricsCallback" in conf[env_id]["callback"]
         assert conf["NomadOffice-v0"]["gamma"] == 0.9
     for algo in ("twoda2c", "twodppo"):
-        assert yaml.safe_load((HYPERPARAMS / f"{algo}.yml").read_text())["NomadOffice-v0"]["punishment_gamma"] == 0.1
+        assert yaml.safe_load(hyperparams_path(algo).read_text())["NomadOffice-v0"]["punishment_gamma"] == 0.1
 
 
 @pytest.mark.parametrize("algo", ALGOS)

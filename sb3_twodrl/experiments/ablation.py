@@ -2,7 +2,7 @@
 
 Every arm is a grid of (arm, seed) runs of :func:`~sb3_twodrl.experiments.runner.run_pair`
 (epochs of K learning trials and M test trials, batched envs, resume), in ``<out>/<arm>/``. All arms
-share the protocol's settings (``<hyperparams-dir>/a2c.yml`` and ``twoda2c.yml``, whose Nomad entries
+share the protocol's settings (the packaged ``a2c.yml`` and ``twoda2c.yml``, whose Nomad entries
 differ only in the 2D-RL arguments); an arm changes only these:
 
 1. ``a2c``: SB3's A2C.
@@ -51,6 +51,7 @@ import numpy as np
 from sb3_twodrl.experiments.grid import check_config, collect_results, pending, run_grid
 from sb3_twodrl.experiments.intervals import mean_ci, wilson
 from sb3_twodrl.experiments.protocol import PRESETS, RunSpec, load_hyperparams, parse_env_kwargs
+from sb3_twodrl.hyperparams import hyperparams_path
 
 _LOG_PROB_SCORE = {"actor_update": "log_prob"}
 """The actor update every arm but ``paper_tempered``, ``paper_compensated`` and the eq. 10 arms ran with
@@ -117,7 +118,6 @@ METRICS = (
     "reward_per_step",
     "interest_share",
 )
-_CHECKOUT_HYPERPARAMS = Path(__file__).resolve().parents[2] / "scripts" / "hyperparams"
 
 
 def arm_hyperparams(arm: str, base: dict[str, dict[str, Any]], temperature: float | None) -> tuple[str, dict]:
@@ -236,7 +236,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--learn-episodes", "-K", type=int, default=PRESETS["paper"]["learn_episodes"])
     p.add_argument("--test-episodes", "-M", type=int, default=PRESETS["paper"]["test_episodes"])
     p.add_argument("--fixed-temperature", type=float, help="default: the paper arm's measured mean temperature")
-    p.add_argument("--hyperparams-dir", default=str(_CHECKOUT_HYPERPARAMS), help="folder of a2c.yml, twoda2c.yml")
+    p.add_argument("--hyperparams-dir", help="folder of a2c.yml, twoda2c.yml (default: the packaged files)")
     p.add_argument("--checkpoint-every", type=int, default=10, help="epochs between checkpoints (0: none)")
     p.add_argument("--out", type=Path, default=Path("runs") / "ablation")
     p.add_argument("--backend", choices=("process", "ray", "serial"), default="process")
@@ -335,9 +335,9 @@ def ablation(argv: list[str] | None = None) -> dict[str, list[dict[str, float]]]
         return report(frames_from_results(args.from_results), args.out)
     for package in args.gym_packages:
         importlib.import_module(package)
-    directory = Path(args.hyperparams_dir)
     shared = parse_env_kwargs(args.set, "--set")
-    base = {algo: {**load_hyperparams(directory / f"{algo}.yml", args.env), **shared} for algo in ("a2c", "twoda2c")}
+    files = {algo: hyperparams_path(algo, args.hyperparams_dir) for algo in ("a2c", "twoda2c")}
+    base = {algo: {**load_hyperparams(path, args.env), **shared} for algo, path in files.items()}
     free = [arm for arm in args.arms if arm not in FIXED]
     fixed = [arm for arm in args.arms if arm in FIXED]
     _run_arms(args, free, base, None)

@@ -1,11 +1,12 @@
 """Non-regression against stock SB3 on classic tasks (issue 11): ``sb3-twodrl-non-regression``.
 
-Each (algo, seed) trains with rl-zoo3 itself (``rl_zoo3.train``, the hyperparameter files of
-``--hyperparams-dir``, i.e. rl-zoo3's own entries for stock A2C and the same entries plus the 2D-RL
-arguments for TwoDimA2C) in a worker process, then its final model runs ``--episodes``
-deterministic episodes on a fresh env (with the run's ``VecNormalize`` statistics, frozen, where the
-entry normalises), seeded apart from training. The table gives each algo's mean return per seed and
-over seeds with a 95% t-interval, and the difference to the first algo with a Welch interval.
+Each (algo, seed) trains with rl-zoo3 itself (``rl_zoo3.train``, the packaged hyperparameter files of
+:mod:`sb3_twodrl.hyperparams` or those of ``--hyperparams-dir``, i.e. rl-zoo3's own entries for stock
+A2C and the same entries plus the 2D-RL arguments for TwoDimA2C) in a worker process, then its final
+model runs ``--episodes`` deterministic episodes on a fresh env (with the run's ``VecNormalize``
+statistics, frozen, where the entry normalises), seeded apart from training. The table gives each algo's
+mean return per seed and over seeds with a 95% t-interval, and the difference to the first algo with a
+Welch interval.
 Requires the ``zoo`` extra.
 """
 
@@ -19,8 +20,8 @@ import os
 from pathlib import Path
 
 from sb3_twodrl.experiments.intervals import mean_ci, welch_ci
+from sb3_twodrl.hyperparams import hyperparams_path, read_entry
 
-_CHECKOUT_HYPERPARAMS = Path(__file__).resolve().parents[2] / "scripts" / "hyperparams"
 EVAL_SEED = 10**6
 """Seed of the evaluation env: apart from the training seeds."""
 
@@ -30,12 +31,13 @@ def train_and_evaluate(
     env_id: str,
     seed: int,
     out: str,
-    hyperparams_dir: str,
+    hyperparams_dir: str | None,
     episodes: int,
     n_timesteps: int | None = None,
     overrides: tuple[str, ...] = (),
 ) -> float:
-    """Train ``algo`` on ``env_id`` with rl-zoo3 (seed ``seed``, logs in ``out``); its mean evaluation return.
+    """Train ``algo`` on ``env_id`` with rl-zoo3 (seed ``seed``, logs in ``out``, ``<algo>.yml`` of
+    ``hyperparams_dir``, by default the packaged one); its mean evaluation return.
 
     ``n_timesteps``: the budget, if not the file's (rl-zoo3's ``-n``); ``overrides``: ``KEY:VALUE``
     settings over the file's entry (rl-zoo3's ``--hyperparams``).
@@ -53,11 +55,12 @@ def train_and_evaluate(
     log = Path(out) / f"{algo}_seed{seed}"
     argv = ["--algo", algo, "--env", env_id, "--seed", str(seed), "-f", str(log), "--eval-freq", "-1"]
     argv += ["--vec-env", "dummy", "--log-interval", "-1", "--device", "cpu"]
+    argv += ["--conf-file", str(hyperparams_path(algo, hyperparams_dir))]
     if n_timesteps is not None:
         argv += ["--n-timesteps", str(n_timesteps)]
     if overrides:
         argv += ["--hyperparams", *overrides]
-    run_zoo_entry("train.py", prepare_zoo_argv(argv, hyperparams_dir), train)
+    run_zoo_entry("train.py", prepare_zoo_argv(argv), train)
     (run,) = sorted((log / algo).glob(f"{env_id}_*"))
     model = algo_class(algo).load(run / f"{env_id}.zip", device="cpu")
     env = make_vec_env(env_id, n_envs=1, seed=EVAL_SEED + seed)
@@ -91,7 +94,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--seeds", type=int, nargs="+", default=list(range(5)))
     p.add_argument("--episodes", type=int, default=20, help="deterministic evaluation episodes per model")
     p.add_argument("--n-timesteps", type=int, help="training budget (default: each file's n_timesteps)")
-    p.add_argument("--hyperparams-dir", default=str(_CHECKOUT_HYPERPARAMS))
+    p.add_argument("--hyperparams-dir", help="folder of <algo>.yml (default: the packaged files)")
     p.add_argument(
         "--set",
         nargs="+",
@@ -109,14 +112,10 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def settings(args: argparse.Namespace) -> dict[str, str]:
     """What a kept result must agree on, per algo: its file's entry for the env, the budget, the episodes."""
-    import yaml
-
     out = {}
     for algo in args.algos:
-        entries = yaml.safe_load((Path(args.hyperparams_dir) / f"{algo}.yml").read_text()) or {}
-        if args.env not in entries:
-            raise ValueError(f"env: {args.hyperparams_dir}/{algo}.yml has no entry for {args.env!r}")
-        kept = {"entry": entries[args.env], "n_timesteps": args.n_timesteps, "episodes": args.episodes}
+        entry = read_entry(hyperparams_path(algo, args.hyperparams_dir), args.env)
+        kept = {"entry": entry, "n_timesteps": args.n_timesteps, "episodes": args.episodes}
         if algo != args.algos[0]:
             kept["set"] = sorted(args.set)
         out[algo] = json.dumps(kept, sort_keys=True, default=str)

@@ -11,6 +11,8 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from sb3_twodrl.hyperparams import read_entry
+
 METRICS = ("goal_rate", "reward_per_step", "shortcut_share", "detour_share", "collision_rate")
 LEARNING = ("interest_share", "mean_temperature")
 """Per epoch, over the learning steps of the rollouts that ended in it: the share of actions whose
@@ -88,23 +90,16 @@ class RunSpec:
         return out
 
 
-def load_hyperparams(path: str | Path, env_id: str, fallback_env_id: str = "NomadOffice-v0") -> dict[str, Any]:
-    """The ``env_id`` entry (else ``fallback_env_id``'s) of an rl-zoo3 hyperparameter YAML file.
+def load_hyperparams(path: str | Path, env_id: str) -> dict[str, Any]:
+    """The ``env_id`` entry of an rl-zoo3 hyperparameter file (:func:`~sb3_twodrl.hyperparams.read_entry`).
 
     Keys only rl-zoo3 uses (``n_timesteps``, ``callback``, ...) are dropped; a ``policy_kwargs``
     string is evaluated as rl-zoo3 does. Schedules (``lin_...``) are rejected: an epoch protocol has
     no total budget to schedule over.
-    """
-    import yaml
 
-    path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"hyperparameter file {str(path)!r} does not exist")
-    conf = yaml.safe_load(path.read_text()) or {}
-    entry = conf.get(env_id) or conf.get(fallback_env_id)
-    if entry is None:
-        raise ValueError(f"{path} has no entry for {env_id!r} or {fallback_env_id!r}")
-    entry = {k: v for k, v in entry.items() if k not in _ZOO_ONLY}
+    :raises ValueError: if the file does not exist or has no entry for ``env_id``
+    """
+    entry = {k: v for k, v in read_entry(path, env_id).items() if k not in _ZOO_ONLY}
     if isinstance(entry.get("policy_kwargs"), str):
         import torch  # noqa: F401  (names available to eval, as rl-zoo3 does)
         from torch import nn  # noqa: F401

@@ -9,7 +9,8 @@ seed, epoch), ``pairs/`` (one CSV per finished run), ``checkpoints/`` (running p
 Running the same command again resumes: finished runs are skipped, interrupted ones continue from
 their last checkpoint.
 
-Hyperparameters: ``<hyperparams-dir>/<algo>.yml`` (the env's entry, else ``NomadOffice-v0``'s).
+Hyperparameters: the env's entry of the packaged ``<algo>.yml`` (:mod:`sb3_twodrl.hyperparams`), or of the one
+in ``--hyperparams-dir``; an env without one is an error.
 Ray workers (``--backend ray --ray-address ...``) must be able to import ``sb3_twodrl`` and the env
 package; with ``--out`` on a shared file system their checkpoints, models and logs land there too.
 """
@@ -25,8 +26,7 @@ from sb3_twodrl.experiments.algos import ALGOS
 from sb3_twodrl.experiments.grid import BACKENDS, check_config, collect_results, pending, run_grid
 from sb3_twodrl.experiments.protocol import PRESETS, RunSpec, load_hyperparams, parse_env_kwargs
 from sb3_twodrl.experiments.vec_env import VEC_ENV_MODES
-
-_CHECKOUT_HYPERPARAMS = Path(__file__).resolve().parents[2] / "scripts" / "hyperparams"
+from sb3_twodrl.hyperparams import hyperparams_path
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -40,7 +40,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--seed-list", type=int, nargs="+", help="explicit seeds (overrides --seeds)")
     p.add_argument("--algos", nargs="+", default=["twoda2c", "a2c"], choices=sorted(ALGOS))
     p.add_argument("--n-envs", type=int, help="parallel learning envs (default: the hyperparams file's n_envs)")
-    p.add_argument("--hyperparams-dir", default=str(_CHECKOUT_HYPERPARAMS), help="folder of <algo>.yml")
+    p.add_argument("--hyperparams-dir", help="folder of <algo>.yml (default: the packaged files)")
     p.add_argument("--env-kwargs", nargs="*", metavar="KEY:VALUE", help="env arguments, e.g. observe_odometry:False")
     p.add_argument("--vec-env", choices=VEC_ENV_MODES, default="auto", help="batched env or DummyVecEnv")
     p.add_argument("--checkpoint-every", type=int, default=10, help="epochs between checkpoints (0: none)")
@@ -65,7 +65,7 @@ def specs_from_args(args: argparse.Namespace) -> tuple[list[RunSpec], Path, dict
     seeds = args.seed_list if args.seed_list else list(range(args.seeds or preset["seeds"]))
     out = Path(args.out or Path("runs") / "reproduce" / args.env)
     env_kwargs = parse_env_kwargs(args.env_kwargs)
-    hyperparams = {a: load_hyperparams(Path(args.hyperparams_dir) / f"{a}.yml", args.env) for a in args.algos}
+    hyperparams = {a: load_hyperparams(hyperparams_path(a, args.hyperparams_dir), args.env) for a in args.algos}
     if args.n_envs:
         for hp in hyperparams.values():
             hp["n_envs"] = args.n_envs
