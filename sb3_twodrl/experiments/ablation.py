@@ -3,7 +3,8 @@
 Every arm is a grid of (arm, seed) runs of :func:`~sb3_twodrl.experiments.runner.run_pair`
 (epochs of K learning trials and M test trials, batched envs, resume), in ``<out>/<arm>/``. All arms
 share the protocol's settings (``<hyperparams-dir>/a2c.yml`` and ``twoda2c.yml``, whose Nomad entries
-differ only in the 2D-RL arguments); an arm changes only these:
+differ only in the 2D-RL arguments); an arm changes only these (every 2D arm runs
+:class:`~sb3_twodrl.experiments.variants.VariantTwoDimA2C`, where its modes live):
 
 1. ``a2c``: SB3's A2C.
 2. ``a2c_fixed``: A2C at a fixed temperature: TwoDimA2C with ``reward_split="none"`` (the whole
@@ -55,21 +56,27 @@ from sb3_twodrl.experiments.protocol import PRESETS, RunSpec, load_hyperparams
 _LOG_PROB_SCORE = {"actor_update": "log_prob"}
 """The actor update every arm but ``paper_tempered``, ``paper_compensated`` and the eq. 10 arms ran with
 (the default then): pinned, so that the arms keep their rows whatever the default becomes."""
+_VARIANT = "twoda2c_variant"
+"""Every 2D arm runs :class:`~sb3_twodrl.experiments.variants.VariantTwoDimA2C` (hyperparameters of
+``twoda2c.yml``): the arms' interest modes, preferences and actor updates are variants, and they ran
+with ``V_P``'s orthogonal initialisation, which the variants keep."""
+_BASE_ALGO = {_VARIANT: "twoda2c"}
+"""Whose hyperparameter file an arm's algorithm takes."""
 
 ARMS: dict[str, tuple[str, dict[str, Any]]] = {
     "a2c": ("a2c", {}),
     "a2c_fixed": (
-        "twoda2c",
+        _VARIANT,
         {"reward_split": "none", "punishment_weight": 0.0, "punishment_vf_coef": 0.0, **_LOG_PROB_SCORE},
     ),
-    "twod_fixed": ("twoda2c", {**_LOG_PROB_SCORE}),
-    "twod_fixed_compensated": ("twoda2c", {"actor_update": "compensated_skip_uniform"}),
-    "paper": ("twoda2c", {"interest": "paper", "preferences": "raw", **_LOG_PROB_SCORE}),
-    "relative_bounded": ("twoda2c", {"interest": "relative", "preferences": "bounded", **_LOG_PROB_SCORE}),
-    "relative_raw": ("twoda2c", {"interest": "relative", "preferences": "raw", **_LOG_PROB_SCORE}),
-    "learned_bounded": ("twoda2c", {"interest": "learned", "preferences": "bounded", **_LOG_PROB_SCORE}),
+    "twod_fixed": (_VARIANT, {**_LOG_PROB_SCORE}),
+    "twod_fixed_compensated": (_VARIANT, {"actor_update": "compensated_skip_uniform"}),
+    "paper": (_VARIANT, {"interest": "paper", "preferences": "raw", **_LOG_PROB_SCORE}),
+    "relative_bounded": (_VARIANT, {"interest": "relative", "preferences": "bounded", **_LOG_PROB_SCORE}),
+    "relative_raw": (_VARIANT, {"interest": "relative", "preferences": "raw", **_LOG_PROB_SCORE}),
+    "learned_bounded": (_VARIANT, {"interest": "learned", "preferences": "bounded", **_LOG_PROB_SCORE}),
     "relative_bound25": (
-        "twoda2c",
+        _VARIANT,
         {
             "interest": "relative",
             "preferences": "bounded",
@@ -78,23 +85,23 @@ ARMS: dict[str, tuple[str, dict[str, Any]]] = {
             **_LOG_PROB_SCORE,
         },
     ),
-    "paper_eq10": ("twoda2c", {"interest": "paper", "preferences": "raw", "actor_update": "preference"}),
-    "paper_tempered": ("twoda2c", {"interest": "paper", "preferences": "raw", "actor_update": "tempered"}),
-    "paper_compensated": ("twoda2c", {"interest": "paper", "preferences": "raw", "actor_update": "compensated"}),
+    "paper_eq10": (_VARIANT, {"interest": "paper", "preferences": "raw", "actor_update": "preference"}),
+    "paper_tempered": (_VARIANT, {"interest": "paper", "preferences": "raw", "actor_update": "tempered"}),
+    "paper_compensated": (_VARIANT, {"interest": "paper", "preferences": "raw", "actor_update": "compensated"}),
     "paper_skip_uniform": (
-        "twoda2c",
+        _VARIANT,
         {"interest": "paper", "preferences": "raw", "actor_update": "compensated_skip_uniform"},
     ),
     "relative_skip_uniform": (
-        "twoda2c",
+        _VARIANT,
         {"interest": "relative", "preferences": "raw", "actor_update": "compensated_skip_uniform"},
     ),
     "learned_skip_uniform": (
-        "twoda2c",
+        _VARIANT,
         {"interest": "learned", "preferences": "raw", "actor_update": "compensated_skip_uniform"},
     ),
     "bound25_eq10": (
-        "twoda2c",
+        _VARIANT,
         {
             "interest": "relative",
             "preferences": "bounded",
@@ -108,7 +115,7 @@ FIXED = ("a2c_fixed", "twod_fixed", "twod_fixed_compensated")
 """Arms acting at a fixed temperature (that of the ``paper`` arm), raw preferences."""
 DEFAULT_ARMS = ("a2c", "a2c_fixed", "twod_fixed", "paper", "learned_skip_uniform")
 """Issue 11's five arms: A2C, A2C and TwoDimA2C at the paper arm's mean temperature, eq. 9 as the paper
-writes it, and TwoDimA2C's default (``interest="learned"``, pinned so that the arm keeps its rows)."""
+writes it, and TwoDimA2C's default of its time (``interest="learned"``, pinned so that the arm keeps its rows)."""
 METRICS = (
     "learned",
     "final_goal_rate",
@@ -125,7 +132,7 @@ def arm_hyperparams(arm: str, base: dict[str, dict[str, Any]], temperature: floa
     if arm not in ARMS:
         raise ValueError(f"arm must be one of {sorted(ARMS)}, got {arm!r}")
     algo, overrides = ARMS[arm]
-    hp = {**base[algo], **overrides}
+    hp = {**base[_BASE_ALGO.get(algo, algo)], **overrides}
     if arm in FIXED:
         if temperature is None or not temperature > 0:
             raise ValueError(f"arm {arm!r} needs a positive fixed temperature, got {temperature!r}")
