@@ -197,7 +197,7 @@ def test_the_preference_bound_is_the_largest_spread_and_is_saved(bound: float, t
     spread = dist.distribution.logits.std(dim=1, unbiased=False)  # log-probabilities: the logits shifted
     assert th.allclose(spread, th.full_like(spread, bound), atol=1e-4)
     model.save(tmp_path / "m.zip")
-    assert TwoDimA2C.load(tmp_path / "m.zip").policy.preference_bound == bound
+    assert VariantTwoDimA2C.load(tmp_path / "m.zip").policy.preference_bound == bound
 
 
 @pytest.mark.parametrize("bound", [0, -1.0, float("inf")])
@@ -229,7 +229,7 @@ def test_eq10_corrects_a_near_certain_crash(actor_update: str, corrected: bool) 
 def test_the_actor_update_is_saved_and_checked(actor_update: str, tmp_path: Any) -> None:
     model = VariantTwoDimA2C("MlpPolicy", LatticeCorridor(), actor_update=actor_update)
     model.save(tmp_path / "m.zip")
-    assert TwoDimA2C.load(tmp_path / "m.zip").actor_update == actor_update
+    assert VariantTwoDimA2C.load(tmp_path / "m.zip").actor_update == actor_update
     with pytest.raises(ValueError, match="actor_update must be one of"):
         VariantTwoDimA2C("MlpPolicy", LatticeCorridor(), actor_update="preferences")
     with pytest.raises(ValueError, match="actor_update='preference' needs Discrete actions"):

@@ -195,7 +195,15 @@ class VariantMixin:
     policy: Any
     action_space: spaces.Space
 
-    def _init_variant(self, interest: str, preferences: str, preference_bound: float, actor_update: str) -> None:
+    def __init__(
+        self,
+        *args: Any,
+        interest: str = "learned",
+        preferences: str = "raw",
+        preference_bound: float = PREFERENCE_BOUND,
+        actor_update: str = "compensated_skip_uniform",
+        **kwargs: Any,
+    ):
         check_variant(interest, preferences, preference_bound)
         if actor_update not in self.actor_updates:
             raise ValueError(f"actor_update must be one of {self.actor_updates}, got {actor_update!r}")
@@ -203,6 +211,9 @@ class VariantMixin:
         self.preferences = preferences
         self.preference_bound = preference_bound
         self.actor_update = actor_update
+        super().__init__(*args, **kwargs)
+        if actor_update == "preference" and not isinstance(self.action_space, spaces.Discrete):
+            raise ValueError(f"actor_update='preference' needs Discrete actions, got {self.action_space}")
 
     def _two_dim_policy_class(self, policy_class: type) -> type:
         return variant_policy_class(policy_class)
@@ -230,20 +241,6 @@ class VariantTwoDimA2C(VariantMixin, TwoDimA2C):
 
     policy_aliases: ClassVar[dict[str, type[BasePolicy]]] = _VARIANT_POLICIES
 
-    def __init__(
-        self,
-        *args: Any,
-        interest: str = "learned",
-        preferences: str = "raw",
-        preference_bound: float = PREFERENCE_BOUND,
-        actor_update: str = "compensated_skip_uniform",
-        **kwargs: Any,
-    ):
-        self._init_variant(interest, preferences, preference_bound, actor_update)
-        super().__init__(*args, **kwargs)
-        if actor_update == "preference" and not isinstance(self.action_space, spaces.Discrete):
-            raise ValueError(f"actor_update='preference' needs Discrete actions, got {self.action_space}")
-
 
 class VariantTwoDimPPO(VariantMixin, TwoDimPPO):
     """``TwoDimPPO`` with the ablation's ``interest``, ``preferences``, ``preference_bound`` and
@@ -252,18 +249,6 @@ class VariantTwoDimPPO(VariantMixin, TwoDimPPO):
 
     policy_aliases: ClassVar[dict[str, type[BasePolicy]]] = _VARIANT_POLICIES
     actor_updates: ClassVar[tuple[str, ...]] = ("log_prob", "tempered", "compensated", "compensated_skip_uniform")
-
-    def __init__(
-        self,
-        *args: Any,
-        interest: str = "learned",
-        preferences: str = "raw",
-        preference_bound: float = PREFERENCE_BOUND,
-        actor_update: str = "compensated_skip_uniform",
-        **kwargs: Any,
-    ):
-        self._init_variant(interest, preferences, preference_bound, actor_update)
-        super().__init__(*args, **kwargs)
 
     def _rollout_log_probs(self, latent_pi: th.Tensor, distribution: Any, actions: th.Tensor) -> th.Tensor:
         """``"log_prob"``: under the raw preferences (``T = 1``), the policy being optimised."""
