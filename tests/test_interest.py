@@ -84,10 +84,10 @@ def test_learned_interest_head_predicts_delta_plus() -> None:
 
 def test_learned_interest_head_is_saved_and_loaded(tmp_path: Any) -> None:
     env = make_vec_env(lambda: TimeLimit(LatticeCorridor(5, 3), 40), n_envs=2, seed=0)
-    model = VariantTwoDimA2C("MlpPolicy", env, n_steps=16, interest="learned", seed=0).learn(320)
+    model = TwoDimA2C("MlpPolicy", env, n_steps=16, seed=0).learn(320)
     model.save(tmp_path / "model")
     loaded = TwoDimA2C.load(tmp_path / "model")
-    assert loaded.policy.interest == "learned"
+    assert loaded.policy.interest_net is not None
     for name, tensor in model.policy.state_dict().items():
         assert th.equal(loaded.policy.state_dict()[name], tensor), name
     obs = np.eye(15, dtype=np.float32)

@@ -172,7 +172,7 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
                 + self.punishment_vf_coef * punishment_value_loss
             )
             interest_loss = None
-            if predicted is not None:  # the head learns E[delta+ | s] (sb3_twodrl.common.interest, "learned")
+            if predicted is not None:  # the head learns E[delta+ | s] (sb3_twodrl.common.interest)
                 interest_loss = F.mse_loss(rollout_data.interests, predicted.flatten())
                 loss = loss + self.interest_coef * interest_loss
             self.policy.optimizer.zero_grad()

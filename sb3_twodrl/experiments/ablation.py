@@ -15,7 +15,7 @@ differ only in the 2D-RL arguments); an arm changes only these (every 2D arm run
    with the actor update ``"log_prob"`` (the default before the compensated score), pinned (arms
    2-5 and the relative ones too).
 5. ``relative_bounded``, ``relative_raw``, ``learned_bounded``: the options of
-   :mod:`sb3_twodrl.common.interest`; ``relative_bound25``: the relative interest on preferences
+   :mod:`sb3_twodrl.experiments.variants`; ``relative_bound25``: the relative interest on preferences
    bounded to an sd of 2.5 with the floor at 1 (exploratory, derived in ``docs/ablation.md``);
    ``paper_eq10`` and ``bound25_eq10``: ``paper`` and ``relative_bound25`` with eq. 10 taken
    literally (``actor_update="preference"``; exploratory); ``paper_tempered``: ``paper`` with the

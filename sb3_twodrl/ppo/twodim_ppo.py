@@ -208,7 +208,7 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
                     + self.vf_coef * value_loss
                     + self.punishment_vf_coef * punishment_value_loss
                 )
-                if predicted is not None:  # the head learns E[delta+ | s] (sb3_twodrl.common.interest, "learned")
+                if predicted is not None:  # the head learns E[delta+ | s] (sb3_twodrl.common.interest)
                     interest_loss = F.mse_loss(rollout_data.interests, predicted.flatten())
                     interest_losses.append(interest_loss.item())
                     loss = loss + self.interest_coef * interest_loss
