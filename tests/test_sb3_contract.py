@@ -1,6 +1,7 @@
 """SB3's own contract, as SB3's tests state it (``tests/test_save_load.py::test_save_load_policy``,
 ``tests/test_identity.py::test_discrete``), with the 2D-RL algorithms and their variants standing in."""
 
+import inspect
 import io
 import json
 import zipfile
@@ -23,6 +24,7 @@ from stable_baselines3.common.evaluation import evaluate_policy
 from stable_baselines3.common.vec_env import DummyVecEnv
 
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
+from sb3_twodrl.common.policies import TEMPERATURE_ARGUMENTS, TwoDimPolicyMixin
 from sb3_twodrl.experiments.variants import VariantTwoDimA2C, VariantTwoDimPPO
 
 ALGOS = (TwoDimA2C, TwoDimPPO)
@@ -165,3 +167,16 @@ def test_loading_a_file_of_the_old_layout_says_so(tmp_path: Path, model_class: t
 def test_temperature_settings_are_not_policy_kwargs() -> None:
     with pytest.raises(ValueError, match=r"policy_kwargs must not hold \['min_temperature'\]"):
         TwoDimA2C("MlpPolicy", "CartPole-v1", policy_kwargs=dict(min_temperature=0.1))
+
+
+def test_one_set_of_defaults() -> None:
+    """TwoDimA2C and TwoDimPPO add the same arguments with the same defaults, the policy's for its own."""
+    added = {}
+    for cls in ALGOS:
+        stock = inspect.signature(cls.__mro__[2].__init__).parameters  # SB3's A2C / PPO
+        mine = inspect.signature(cls.__init__).parameters
+        added[cls] = {name: p.default for name, p in mine.items() if name not in stock}
+    assert added[TwoDimA2C] == added[TwoDimPPO]
+    policy = inspect.signature(TwoDimPolicyMixin.__init__).parameters
+    for name in TEMPERATURE_ARGUMENTS:
+        assert policy[name].default == added[TwoDimA2C][name], name
