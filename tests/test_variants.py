@@ -74,6 +74,8 @@ ROWS = [  # (arm, committed results file, seed): one row per kind of variant, it
     ("relative_skip_uniform", "ablation_relative_skip_uniform_results.csv", 0),
     ("paper_skip_uniform", "ablation_skip_uniform_results.csv", 10),
     ("paper_tempered", "ablation_ent200_results.csv", 0),
+    ("paper", "ablation_ent_results.csv", 0),  # actor_update="log_prob"
+    ("relative_bounded", "ablation_ent_results.csv", 0),
 ]
 
 
