@@ -24,7 +24,8 @@ from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.evaluation import evaluate_policy
 
 from envs.nomad.batched import make_sb3_vec_env
-from sb3_twodrl import NavigationMetricsCallback, TwoDimA2C
+from sb3_twodrl import NavigationMetricsCallback
+from sb3_twodrl.experiments.variants import VariantTwoDimA2C as TwoDimA2C  # the interest modes are variants
 
 PAPER = dict(interest="paper", preferences="raw")
 """The floor study is of eq. 9 taken literally (the default interest is relative: README, "Design notes")."""

@@ -11,7 +11,7 @@ A2C_ARGS = dict(n_steps=5, gamma=0.97, gae_lambda=0.95, ent_coef=0.01, seed=3, d
 def test_degenerate_settings_reproduce_a2c_parameters() -> None:
     """Fixed temperature 1 on raw preferences (the default bounds them), no punishment stream: A2C."""
     baseline = A2C("MlpPolicy", "CartPole-v1", **A2C_ARGS).learn(600)
-    degenerate = dict(temperature=1.0, preferences="raw", punishment_weight=0.0, punishment_vf_coef=0.0)
+    degenerate = dict(temperature=1.0, punishment_weight=0.0, punishment_vf_coef=0.0)
     model = TwoDimA2C("MlpPolicy", "CartPole-v1", **degenerate, **A2C_ARGS).learn(600)
     assert model._n_updates == baseline._n_updates >= 100
     expected = baseline.policy.state_dict()

@@ -85,8 +85,8 @@ def test_checkpoint_made_under_other_class_defaults_is_refused(tmp_path, monkeyp
     """A run resumed after a release changed a default it relied on would mix two algorithms' rows."""
     s = spec(tmp_path, "twoda2c", checkpoint_every=1)
     run_pair(replace(s, epochs=2))  # checkpoints epoch 1
-    assert s.protocol()["defaults"]["actor_update"] == repr(
-        inspect.signature(TwoDimA2C).parameters["actor_update"].default
+    assert s.protocol()["defaults"]["interest_coef"] == repr(
+        inspect.signature(TwoDimA2C).parameters["interest_coef"].default
     )
     assert "gamma" not in s.protocol()["defaults"]  # set by the hyperparameters
     signature = inspect.signature(TwoDimA2C.__init__)

@@ -10,7 +10,7 @@ from gymnasium.wrappers import TimeLimit
 from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_twodrl import TwoDimA2C
-from sb3_twodrl.common.interest import INTEREST_MODES
+from sb3_twodrl.experiments.variants import INTEREST_MODES, VariantTwoDimA2C, scored_actions
 from tests.toy_envs import LatticeCorridor
 
 WEST = 3  # LatticeCorridor's move into the wall at the start
@@ -32,7 +32,7 @@ class ScaledFeedback(gym.Wrapper):
 def rollout_temperatures(interest: str, factor: float) -> np.ndarray:
     """Inverse temperatures of one seeded rollout with rewards and critics' outputs scaled by ``factor``."""
     env = make_vec_env(lambda: ScaledFeedback(TimeLimit(LatticeCorridor(5, 3), 40), factor), n_envs=2, seed=0)
-    model = TwoDimA2C("MlpPolicy", env, n_steps=64, gamma=0.9, interest=interest, seed=0)
+    model = VariantTwoDimA2C("MlpPolicy", env, n_steps=64, gamma=0.9, interest=interest, seed=0)
     heads = [model.policy.value_net, model.policy.punishment_value_net]
     if model.policy.interest_net is not None:  # the learned interest's estimate scales with what it predicts
         heads.append(model.policy.interest_net)
@@ -64,7 +64,7 @@ def test_learned_interest_head_predicts_delta_plus() -> None:
     """The head's target is the interest of the transition out of each state: repeated updates on
     one rollout bring its predictions close to that rollout's ``delta+``."""
     env = make_vec_env(lambda: TimeLimit(LatticeCorridor(5, 3), 40), n_envs=4, seed=0)
-    model = TwoDimA2C("MlpPolicy", env, n_steps=32, gamma=0.9, interest="learned", learning_rate=3e-3, seed=0)
+    model = VariantTwoDimA2C("MlpPolicy", env, n_steps=32, gamma=0.9, interest="learned", learning_rate=3e-3, seed=0)
     model.learn(128)
     buffer = model.rollout_buffer
     observations = th.as_tensor(buffer.observations.reshape(-1, *model.observation_space.shape))
@@ -84,10 +84,10 @@ def test_learned_interest_head_predicts_delta_plus() -> None:
 
 def test_learned_interest_head_is_saved_and_loaded(tmp_path: Any) -> None:
     env = make_vec_env(lambda: TimeLimit(LatticeCorridor(5, 3), 40), n_envs=2, seed=0)
-    model = TwoDimA2C("MlpPolicy", env, n_steps=16, interest="learned", seed=0).learn(320)
+    model = TwoDimA2C("MlpPolicy", env, n_steps=16, seed=0).learn(320)
     model.save(tmp_path / "model")
     loaded = TwoDimA2C.load(tmp_path / "model")
-    assert loaded.policy.interest == "learned"
+    assert loaded.policy.interest_net is not None
     for name, tensor in model.policy.state_dict().items():
         assert th.equal(loaded.policy.state_dict()[name], tensor), name
     obs = np.eye(15, dtype=np.float32)
@@ -101,7 +101,7 @@ def test_learned_interest_head_is_saved_and_loaded(tmp_path: Any) -> None:
 
 def test_only_the_learned_mode_has_an_interest_head() -> None:
     for mode in INTEREST_MODES:
-        policy = TwoDimA2C("MlpPolicy", LatticeCorridor(), interest=mode).policy
+        policy = VariantTwoDimA2C("MlpPolicy", LatticeCorridor(), interest=mode).policy
         assert (policy.interest_net is not None) == (mode == "learned")
 
 
@@ -112,7 +112,7 @@ def test_a_fixed_temperature_has_no_interest_head() -> None:
     env = make_vec_env(lambda: TimeLimit(LatticeCorridor(6, 3), 60), n_envs=2, seed=0)
     params = []
     for mode in ("paper", "learned"):
-        model = TwoDimA2C("MlpPolicy", env, temperature=0.7, interest=mode, seed=0).learn(200)
+        model = VariantTwoDimA2C("MlpPolicy", env, temperature=0.7, interest=mode, seed=0).learn(200)
         assert model.policy.interest_net is None
         params.append(th.nn.utils.parameters_to_vector(model.policy.parameters()))
     th.testing.assert_close(params[0], params[1])
@@ -121,7 +121,7 @@ def test_a_fixed_temperature_has_no_interest_head() -> None:
 def collapsed_model(lead: float = 30.0, **kwargs: Any) -> TwoDimA2C:
     """A model whose actor has collapsed onto driving into the wall (raw preference ``lead`` for west)."""
     env = make_vec_env(lambda: TimeLimit(LatticeCorridor(6, 3), 60), n_envs=4, seed=0)
-    model = TwoDimA2C("MlpPolicy", env, gamma=0.9, seed=0, **kwargs)
+    model = VariantTwoDimA2C("MlpPolicy", env, gamma=0.9, seed=0, **kwargs)
     with th.no_grad():
         model.policy.action_net.bias.copy_(th.tensor([0.0, 0.0, 0.0, lead]))
     return model
@@ -184,7 +184,7 @@ def test_paper_mode_freezes_on_a_collapsed_policy() -> None:
 )
 def test_bad_interest_settings_are_rejected(kwargs: dict[str, Any], match: str) -> None:
     with pytest.raises(ValueError, match=match):
-        TwoDimA2C("MlpPolicy", LatticeCorridor(), **kwargs)
+        VariantTwoDimA2C("MlpPolicy", LatticeCorridor(), **kwargs)
 
 
 @pytest.mark.parametrize("bound", [0.5, 2.5])
@@ -197,13 +197,13 @@ def test_the_preference_bound_is_the_largest_spread_and_is_saved(bound: float, t
     spread = dist.distribution.logits.std(dim=1, unbiased=False)  # log-probabilities: the logits shifted
     assert th.allclose(spread, th.full_like(spread, bound), atol=1e-4)
     model.save(tmp_path / "m.zip")
-    assert TwoDimA2C.load(tmp_path / "m.zip").policy.preference_bound == bound
+    assert VariantTwoDimA2C.load(tmp_path / "m.zip").policy.preference_bound == bound
 
 
 @pytest.mark.parametrize("bound", [0, -1.0, float("inf")])
 def test_a_bad_preference_bound_is_named(bound: float) -> None:
     with pytest.raises(ValueError, match="preference_bound"):
-        TwoDimA2C("MlpPolicy", LatticeCorridor(), preferences="bounded", preference_bound=bound)
+        VariantTwoDimA2C("MlpPolicy", LatticeCorridor(), preferences="bounded", preference_bound=bound)
 
 
 @pytest.mark.parametrize(("actor_update", "corrected"), [("log_prob", False), ("preference", True)])
@@ -227,13 +227,13 @@ def test_eq10_corrects_a_near_certain_crash(actor_update: str, corrected: bool) 
 
 @pytest.mark.parametrize("actor_update", ["preference", "tempered", "compensated", "compensated_skip_uniform"])
 def test_the_actor_update_is_saved_and_checked(actor_update: str, tmp_path: Any) -> None:
-    model = TwoDimA2C("MlpPolicy", LatticeCorridor(), actor_update=actor_update)
+    model = VariantTwoDimA2C("MlpPolicy", LatticeCorridor(), actor_update=actor_update)
     model.save(tmp_path / "m.zip")
-    assert TwoDimA2C.load(tmp_path / "m.zip").actor_update == actor_update
+    assert VariantTwoDimA2C.load(tmp_path / "m.zip").actor_update == actor_update
     with pytest.raises(ValueError, match="actor_update must be one of"):
-        TwoDimA2C("MlpPolicy", LatticeCorridor(), actor_update="preferences")
+        VariantTwoDimA2C("MlpPolicy", LatticeCorridor(), actor_update="preferences")
     with pytest.raises(ValueError, match="actor_update='preference' needs Discrete actions"):
-        TwoDimA2C("MlpPolicy", "Pendulum-v1", actor_update="preference")
+        VariantTwoDimA2C("MlpPolicy", "Pendulum-v1", actor_update="preference")
 
 
 @pytest.mark.parametrize("actor_update", ["tempered", "compensated"])
@@ -243,7 +243,7 @@ def test_the_tempered_update_at_temperature_one_is_the_log_prob_update(env_id: s
     (up to float32 rounding: a Gaussian's std is broadcast over the batch before the sum)."""
 
     def learned(actor_update: str) -> list[th.Tensor]:
-        model = TwoDimA2C("MlpPolicy", env_id, n_steps=8, temperature=1.0, actor_update=actor_update, seed=3)
+        model = VariantTwoDimA2C("MlpPolicy", env_id, n_steps=8, temperature=1.0, actor_update=actor_update, seed=3)
         model.learn(64)
         return [p.detach().clone() for p in model.policy.parameters()]
 
@@ -257,7 +257,7 @@ def test_for_a_gaussian_the_compensated_update_is_the_tempered_one(use_sde: bool
     updates learn the same parameters at any temperature."""
 
     def learned(actor_update: str) -> list[th.Tensor]:
-        model = TwoDimA2C(
+        model = VariantTwoDimA2C(
             "MlpPolicy", "Pendulum-v1", n_steps=8, temperature=0.5, use_sde=use_sde, actor_update=actor_update, seed=3
         )
         model.learn(64)
@@ -281,7 +281,7 @@ def test_the_tempered_score_is_unbiased_under_the_drawing_distribution(temperatu
 
     def mean_score_gradient(score: str) -> th.Tensor:
         policy.zero_grad()
-        *_, scores, _ = policy.evaluate_actions_two_dim(obs, actions, score, inverse)
+        *_, scores, _ = scored_actions(policy, obs, actions, inverse, score)
         with th.no_grad():
             probs = policy.tempered_distribution(policy._actor_latent(obs[:1]), inverse[:1]).distribution.probs[0]
         (probs * scores).sum().backward()
@@ -305,7 +305,7 @@ def test_the_compensated_score_moves_preferences_by_one_hot_minus_the_drawing_di
 
     def score_gradient(score: str) -> th.Tensor:
         policy.zero_grad()
-        *_, scores, _ = policy.evaluate_actions_two_dim(obs, th.tensor([2]), score, inverse)
+        *_, scores, _ = scored_actions(policy, obs, th.tensor([2]), inverse, score)
         scores.sum().backward()
         return policy.action_net.bias.grad.clone()
 
@@ -323,17 +323,10 @@ def test_the_skip_uniform_score_is_the_compensated_one_but_for_uniform_moves() -
 
     def score_gradient(score: str, sample: int) -> th.Tensor:
         policy.zero_grad()
-        *_, scores, entropy = policy.evaluate_actions_two_dim(obs, actions, score, inverse)
+        *_, scores, entropy = scored_actions(policy, obs, actions, inverse, score)
         (scores[sample] + entropy[sample]).backward()
         return th.cat([p.grad.flatten() for p in policy.parameters() if p.grad is not None])
 
     assert score_gradient("compensated_skip_uniform", 0).abs().max() == 0
     assert score_gradient("compensated", 0).abs().max() > 0
     th.testing.assert_close(score_gradient("compensated_skip_uniform", 1), score_gradient("compensated", 1))
-
-
-@pytest.mark.parametrize("score", ["tempered", "compensated", "compensated_skip_uniform"])
-def test_the_tempered_score_needs_the_temperatures(score: str) -> None:
-    policy = collapsed_model().policy
-    with pytest.raises(ValueError, match="inverse temperatures"):
-        policy.evaluate_actions_two_dim(th.zeros(1, 18), th.zeros(1), score)

@@ -7,10 +7,11 @@ from stable_baselines3 import PPO
 from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_twodrl import TwoDimPPO
+from sb3_twodrl.experiments.variants import VariantTwoDimPPO, scored_actions
 from tests.toy_envs import ScriptedFeedbackEnv
 
 PPO_ARGS = dict(n_steps=32, batch_size=16, n_epochs=4, clip_range_vf=0.2, gae_lambda=0.9, ent_coef=0.01, device="cpu")
-DEGENERATE = dict(temperature=1.0, preferences="raw", punishment_weight=0.0, punishment_vf_coef=0.0)
+DEGENERATE = dict(temperature=1.0, punishment_weight=0.0, punishment_vf_coef=0.0)
 
 
 def cartpole(seed: int):
@@ -75,8 +76,8 @@ def actor_parameters(model: TwoDimPPO) -> list[th.Tensor]:
 def test_tempered_ratios_at_temperature_one_reproduce_the_log_prob_run(actor_update: str) -> None:
     """At a fixed ``T = 1`` the tempered policy is the raw one and no move is uniform: the same parameters."""
     args = dict(temperature=1.0, seed=3, **PPO_ARGS)
-    raw = TwoDimPPO("MlpPolicy", cartpole(3), **args).learn(128)
-    tempered = TwoDimPPO("MlpPolicy", cartpole(3), actor_update=actor_update, **args).learn(128)
+    raw = VariantTwoDimPPO("MlpPolicy", cartpole(3), actor_update="log_prob", **args).learn(128)
+    tempered = VariantTwoDimPPO("MlpPolicy", cartpole(3), actor_update=actor_update, **args).learn(128)
     for name, tensor in raw.policy.state_dict().items():
         th.testing.assert_close(tempered.policy.state_dict()[name], tensor, rtol=1e-6, atol=1e-7, msg=name)
 
@@ -85,8 +86,8 @@ def rollout_log_ratios(model: TwoDimPPO, actor_update: str) -> th.Tensor:
     """Each stored action's log-ratio under ``actor_update``'s score, with the rollout's policy."""
     data = next(model.rollout_buffer.get(None))
     with th.no_grad():
-        *_, log_prob, _ = model.policy.evaluate_actions_two_dim(
-            data.observations, data.actions.long().flatten(), actor_update, data.inverse_temperatures
+        *_, log_prob, _ = scored_actions(
+            model.policy, data.observations, data.actions.long().flatten(), data.inverse_temperatures, actor_update
         )
     return log_prob - data.old_log_prob
 
@@ -96,7 +97,9 @@ def test_each_ratio_is_one_before_the_update(actor_update: str) -> None:
     """``old_log_prob`` is stored under the policy the ratio compares: the raw one for ``"log_prob"``,
     the tempered one that drew the actions otherwise; so with ``learning_rate=0`` (the policy stays
     the rollout's) no ratio is clipped and the logged KL is 0, the uniform first moves included."""
-    model = TwoDimPPO("MlpPolicy", cartpole(0), learning_rate=0.0, actor_update=actor_update, seed=0, **PPO_ARGS)
+    model = VariantTwoDimPPO(
+        "MlpPolicy", cartpole(0), learning_rate=0.0, interest="paper", actor_update=actor_update, seed=0, **PPO_ARGS
+    )
     with th.no_grad():
         model.policy.action_net.bias.copy_(th.tensor([1.0, -1.0]))  # a policy with preferences to temper
     model.learn(64)
@@ -112,7 +115,9 @@ def test_each_ratio_is_one_before_the_update(actor_update: str) -> None:
 def test_skip_uniform_takes_no_actor_step_from_uniform_moves(actor_update: str) -> None:
     """A rollout drawn wholly uniformly (``1/T = 0``): the skip-uniform ratio gives the actor no
     gradient (the critics still learn); the compensated one moves it."""
-    model = TwoDimPPO("MlpPolicy", cartpole(0), learning_rate=0.0, actor_update=actor_update, seed=0, **PPO_ARGS)
+    model = VariantTwoDimPPO(
+        "MlpPolicy", cartpole(0), learning_rate=0.0, interest="paper", actor_update=actor_update, seed=0, **PPO_ARGS
+    )
     model.learn(64)
     buffer = model.rollout_buffer
     buffer.inverse_temperatures[:] = 0.0
@@ -128,7 +133,7 @@ def test_skip_uniform_takes_no_actor_step_from_uniform_moves(actor_update: str) 
 
 def test_actor_update_is_validated_and_saved(tmp_path) -> None:
     with pytest.raises(ValueError, match="actor_update must be one of"):
-        TwoDimPPO("MlpPolicy", "CartPole-v1", actor_update="preference")
-    model = TwoDimPPO("MlpPolicy", "CartPole-v1", n_steps=16, batch_size=8, actor_update="compensated", seed=0)
+        VariantTwoDimPPO("MlpPolicy", "CartPole-v1", actor_update="preference")
+    model = VariantTwoDimPPO("MlpPolicy", "CartPole-v1", n_steps=16, batch_size=8, actor_update="compensated", seed=0)
     model.save(tmp_path / "m.zip")
     assert TwoDimPPO.load(tmp_path / "m.zip").actor_update == "compensated"

@@ -22,7 +22,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 
 import envs  # noqa: F401  (registers the IDs)
 from envs.nomad.office import GOAL_REWARD
-from sb3_twodrl import TwoDimA2C
+from sb3_twodrl.experiments.variants import VariantTwoDimA2C
 from tests.tabular_oracle import TabularActorCritic
 
 N_STEPS = 1000
@@ -63,9 +63,10 @@ def tables_without_biases(model: BaseAlgorithm) -> None:
             head.bias.requires_grad_(False)
 
 
-def tabular_two_dim_a2c(env: DummyVecEnv, seed: int) -> TwoDimA2C:
-    """TwoDimA2C configured as the paper's tabular 2D-RL (every setting: docs/tabular.md)."""
-    model = TwoDimA2C(
+def tabular_two_dim_a2c(env: DummyVecEnv, seed: int) -> VariantTwoDimA2C:
+    """TwoDimA2C (its variant with eq. 9 and eq. 10 literally) configured as the paper's tabular 2D-RL
+    (every setting: docs/tabular.md)."""
+    model = VariantTwoDimA2C(
         "MlpPolicy",
         env,
         learning_rate=LEARNING_RATE,

@@ -10,6 +10,7 @@ from gymnasium.wrappers import TimeLimit
 from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_twodrl import TwoDimA2C
+from sb3_twodrl.experiments.variants import VariantTwoDimA2C
 from tests.toy_envs import LatticeCorridor
 
 
@@ -25,7 +26,7 @@ def action_probabilities(model: TwoDimA2C, interest: float) -> np.ndarray:
 @pytest.fixture
 def biased_model() -> TwoDimA2C:
     """A model whose actor strongly prefers action 2, whatever the state."""
-    model = TwoDimA2C("MlpPolicy", LatticeCorridor(), interest="paper", preferences="raw", seed=0)
+    model = VariantTwoDimA2C("MlpPolicy", LatticeCorridor(), interest="paper", preferences="raw", seed=0)
     with th.no_grad():
         model.policy.action_net.bias.copy_(th.tensor([0.0, 0.5, 1.0, 0.2]))
     return model
@@ -51,7 +52,7 @@ def test_floor_stops_interest_from_freezing_the_policy(biased_model: TwoDimA2C) 
 @pytest.mark.parametrize("interest", ["paper", "relative"])
 def test_first_action_of_each_episode_is_uniform(interest: str) -> None:
     """Eq. 9's modes: an episode's first step has no transition into it, interest 0: uniform actions."""
-    model = TwoDimA2C("MlpPolicy", LatticeCorridor(), n_steps=64, interest=interest, seed=0).learn(64)
+    model = VariantTwoDimA2C("MlpPolicy", LatticeCorridor(), n_steps=64, interest=interest, seed=0).learn(64)
     buffer = model.rollout_buffer
     starts = buffer.episode_starts.astype(bool)
     assert starts.any() and (buffer.inverse_temperatures[starts] == 0).all()
@@ -65,7 +66,7 @@ def test_which_actor_update_depends_on_the_temperature(actor_update: str, indepe
     """``"log_prob"``: the gradient flows through the raw preferences (eq. 10 has no temperature), so
     one update is the same whatever temperature the actions were drawn at; ``"tempered"``: the score
     is of the policy that drew them, so it is not."""
-    model = TwoDimA2C(
+    model = VariantTwoDimA2C(
         "MlpPolicy", LatticeCorridor(), temperature=0.2, seed=0, n_steps=16, actor_update=actor_update
     ).learn(16)
     policy_state = copy.deepcopy(model.policy.state_dict())
@@ -99,7 +100,7 @@ def outcomes(model: TwoDimA2C, deterministic: bool, episodes: int = 30) -> list[
 
 def lattice_model(**kwargs: Any) -> TwoDimA2C:
     env = make_vec_env(lambda: TimeLimit(LatticeCorridor(8, 4), 60), n_envs=4, seed=0)
-    return TwoDimA2C("MlpPolicy", env, gamma=0.9, seed=0, **kwargs).learn(8_000)
+    return VariantTwoDimA2C("MlpPolicy", env, gamma=0.9, seed=0, **kwargs).learn(8_000)
 
 
 def test_paper_floor_run_does_not_freeze() -> None:
@@ -153,8 +154,8 @@ def test_a_gaussian_at_interest_zero_takes_the_ceiling(use_sde: bool) -> None:
     """Eq. 9 (``interest="paper"``): an episode's first step (interest 0) is uniform for categorical
     actions; a Gaussian has no uniform limit, so it acts at ``max_temperature``, the most random it
     can be, not at the floor."""
-    model = TwoDimA2C("MlpPolicy", "Pendulum-v1", use_sde=use_sde, max_temperature=8.0, interest="paper", seed=0)
+    model = VariantTwoDimA2C("MlpPolicy", "Pendulum-v1", use_sde=use_sde, max_temperature=8.0, interest="paper", seed=0)
     inverse = model.policy.inverse_temperature(np.array([0.0, 2.0, 100.0], dtype=np.float32))
     np.testing.assert_allclose(inverse, [1 / 8.0, 1 / 2.0, 1 / 8.0])
-    categorical = TwoDimA2C("MlpPolicy", LatticeCorridor(), max_temperature=8.0, interest="paper", seed=0).policy
+    categorical = VariantTwoDimA2C("MlpPolicy", LatticeCorridor(), max_temperature=8.0, interest="paper", seed=0).policy
     np.testing.assert_allclose(categorical.inverse_temperature(np.array([0.0, 2.0], dtype=np.float32)), [0.0, 0.5])

@@ -15,7 +15,7 @@ import torch as th
 from gymnasium.wrappers import TimeLimit
 from stable_baselines3.common.env_util import make_vec_env
 
-from sb3_twodrl import TwoDimA2C
+from sb3_twodrl.experiments.variants import VariantTwoDimA2C as TwoDimA2C  # the interest modes are variants
 from tests.toy_envs import LatticeCorridor
 
 SETTINGS = {

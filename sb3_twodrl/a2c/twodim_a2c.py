@@ -6,7 +6,6 @@ import torch as th
 from gymnasium import spaces
 from stable_baselines3 import A2C
 from stable_baselines3.common.buffers import RolloutBuffer
-from stable_baselines3.common.distributions import Distribution
 from stable_baselines3.common.policies import ActorCriticPolicy, BasePolicy
 from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedule
 from stable_baselines3.common.utils import explained_variance
@@ -15,12 +14,10 @@ from torch.nn import functional as F
 from sb3_twodrl.a2c.policies import CnnPolicy, MlpPolicy, MultiInputPolicy
 from sb3_twodrl.common.buffers import TwoDimRolloutBuffer
 from sb3_twodrl.common.on_policy import TwoDimOnPolicyMixin
-from sb3_twodrl.common.policies import TEMPERED_SCORES, TwoDimActorCriticPolicy
+from sb3_twodrl.common.policies import TwoDimActorCriticPolicy
 from sb3_twodrl.common.splitting import RewardSplit
 
 SelfTwoDimA2C = TypeVar("SelfTwoDimA2C", bound="TwoDimA2C")
-
-ACTOR_UPDATES = ("log_prob", *TEMPERED_SCORES, "preference")
 
 
 class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
@@ -31,7 +28,7 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
     ``punishment_gamma``) learn the two evaluations (eq. 3-8). The actor follows the utility
     ``A_R - punishment_weight * A_P`` (eq. 1, 10, with GAE per stream) and, with
     ``temperature="interest"``, acts with a softmax temperature set by the interest
-    ``delta+ = |delta_R| + |delta_P|`` (eq. 2, 9) as the ``interest`` and ``preferences`` modes say
+    ``delta+ = |delta_R| + |delta_P|`` (eq. 2, 9) on a dimensionless scale
     (:mod:`sb3_twodrl.common.interest`), clamped to ``[min_temperature, max_temperature]``.
 
     Every argument of SB3's ``A2C`` keeps its meaning and default (``gamma`` discounts the reward
@@ -44,30 +41,18 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
     :param reward_split: how ``(reward, info)`` becomes ``(r_R, r_P)``: ``"auto"``, ``"info"``,
         ``"cost"``, ``"sign"``, ``"none"`` (``r_R = r``, ``r_P = 0``) or a callable
         (see ``sb3_twodrl.common.splitting``)
-    :param temperature: ``"interest"`` (eq. 9, ``T`` set by the interest) or a fixed positive temperature
-    :param interest: how the interest sets ``T``: ``"learned"`` (default: a head's estimate of
-        ``E[delta+ | s]``, the state's "criticality", over the running mean of ``delta+``),
-        ``"paper"`` (eq. 9 literally: ``T = delta+`` of the transition into the state) or
-        ``"relative"`` (that ``delta+`` over its running mean)
-    :param preferences: ``"raw"`` (eq. 9 literally) or ``"bounded"`` (preferences divided by
-        ``max(1, their sd over the actions / preference_bound)``, so that ``min_temperature`` bounds how
-        greedy actions get)
-    :param preference_bound: the largest sd over the actions of ``"bounded"`` preferences
-    :param interest_coef: loss weight of the ``"learned"`` mode's interest head (its target is ``delta+``)
-    :param actor_update: what the utility corrects: ``"log_prob"`` (the policy gradient of the
-        untempered softmax, ``A * grad log pi(a|s)``: off-policy at ``T != 1``), ``"tempered"``
-        (the policy gradient of the tempered policy that drew the action, eq. 9: ``A * grad log
-        pi_T(a|s)`` at the action's own ``T``, on-policy), ``"compensated"`` (the same, times each
-        action's ``T``: on-policy, and per unit of preference the log-prob update's size at any ``T``,
-        ``A * (1[a] - pi_T(.|s))`` for a softmax; the entropy bonus likewise; for a Gaussian the same
-        as ``"tempered"``), ``"compensated_skip_uniform"`` (default: the same, but no update from an episode's
-        uniform first move, ``1/T = 0``, where ``"compensated"`` gives ``A * (1[a] - 1/4)`` whatever
-        the policy) or ``"preference"`` (eq. 10 literally, lifted
-        to function approximation as the critics' updates are: ``A * grad p(s, a)``, the taken
-        action's preference alone; ``Discrete`` actions only)
+    :param temperature: ``"interest"`` (eq. 9: ``T = I(s) / mean(delta+)``, ``I(s)`` a head's
+        estimate of ``E[delta+ | s]``, the state's "criticality"; :mod:`sb3_twodrl.common.interest`)
+        or a fixed positive temperature
     :param min_temperature: floor of the interest temperature; keeps the policy from freezing
         into argmax once the critics settle and the interest collapses toward 0
     :param max_temperature: ceiling of the interest temperature
+    :param interest_coef: loss weight of the interest head ``I(s)`` (its target is ``delta+``)
+
+    The actor's score is that of the tempered policy that drew each action, with the ``1/T`` taken
+    out of its gradient, and 0 for an action drawn uniformly (eq. 10 as a policy gradient;
+    :meth:`~sb3_twodrl.common.policies.TwoDimPolicyMixin.evaluate_actions_two_dim`). The
+    temperature settings are the policy's constructor arguments, passed through (not in ``policy_kwargs``).
     """
 
     policy_aliases: ClassVar[dict[str, type[BasePolicy]]] = {
@@ -110,16 +95,9 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
         temperature: str | float = "interest",
         min_temperature: float = 0.5,
         max_temperature: float = 10.0,
-        interest: str = "learned",
-        preferences: str = "raw",
-        preference_bound: float = 1.0,
         interest_coef: float = 0.5,
-        actor_update: str = "compensated_skip_uniform",
         _init_setup_model: bool = True,
     ):
-        if actor_update not in ACTOR_UPDATES:
-            raise ValueError(f"actor_update must be one of {ACTOR_UPDATES}, got {actor_update!r}")
-        self.actor_update = actor_update
         policy = self._init_two_dim(
             policy,
             n_steps=n_steps,
@@ -135,10 +113,9 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
             temperature=temperature,
             min_temperature=min_temperature,
             max_temperature=max_temperature,
-            interest=interest,
-            preferences=preferences,
-            preference_bound=preference_bound,
             interest_coef=interest_coef,
+            policy_kwargs=policy_kwargs,
+            _init_setup_model=_init_setup_model,
         )
         super().__init__(
             policy,
@@ -165,12 +142,6 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
             device=device,
             _init_setup_model=_init_setup_model,
         )
-        if actor_update == "preference" and not isinstance(self.action_space, spaces.Discrete):
-            raise ValueError(f"actor_update='preference' needs Discrete actions, got {self.action_space}")
-
-    def _rollout_log_probs(self, latent_pi: th.Tensor, distribution: Distribution, actions: th.Tensor) -> th.Tensor:
-        """A2C never reads ``old_log_prob``: the tempered distribution's, which costs no second distribution."""
-        return distribution.log_prob(actions)
 
     def train(self) -> None:
         """One gradient step: actor on the utility (eq. 1, 10), each critic on its own TD(lambda) target."""
@@ -182,8 +153,8 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
             if isinstance(self.action_space, spaces.Discrete):
                 actions = actions.long().flatten()
 
-            values, punishment_values, predicted, score, entropy = self.policy.evaluate_actions_two_dim(
-                rollout_data.observations, actions, self.actor_update, rollout_data.inverse_temperatures
+            values, punishment_values, predicted, score, entropy = self._evaluate_actions(
+                rollout_data.observations, actions, rollout_data.inverse_temperatures
             )
             advantages = rollout_data.advantages
             if self.normalize_advantage:
@@ -201,7 +172,7 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
                 + self.punishment_vf_coef * punishment_value_loss
             )
             interest_loss = None
-            if predicted is not None:  # the head learns E[delta+ | s] (sb3_twodrl.common.interest, "learned")
+            if predicted is not None:  # the head learns E[delta+ | s] (sb3_twodrl.common.interest)
                 interest_loss = F.mse_loss(rollout_data.interests, predicted.flatten())
                 loss = loss + self.interest_coef * interest_loss
             self.policy.optimizer.zero_grad()

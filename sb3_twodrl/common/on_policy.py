@@ -20,16 +20,23 @@ from stable_baselines3.common.utils import obs_as_tensor
 from stable_baselines3.common.vec_env import VecEnv
 
 from sb3_twodrl.common.buffers import TwoDimBufferMixin, TwoDimDictRolloutBuffer, TwoDimRolloutBuffer
-from sb3_twodrl.common.interest import check_interest_modes
-from sb3_twodrl.common.policies import TwoDimPolicyMixin, check_temperature, two_dim_policy_class
+from sb3_twodrl.common.policies import (
+    TEMPERATURE_ARGUMENTS,
+    TwoDimPolicyMixin,
+    check_temperature,
+    two_dim_policy_class,
+)
 from sb3_twodrl.common.splitting import RewardSplit, make_reward_split, split_rewards
 from sb3_twodrl.common.utils import fast_explained_variance, fast_mean, flat
 from sb3_twodrl.common.validation import (
     check_non_negative,
-    check_positive,
     check_positive_int,
     check_unit_interval,
 )
+
+SAVE_FORMAT = 2
+"""Layout of a saved 2D-RL algorithm: 2 since the temperature settings are the policy's constructor
+arguments and the ablation variants left the algorithms; files without it are refused by ``load``."""
 
 
 class TwoDimOnPolicyMixin:
@@ -75,10 +82,9 @@ class TwoDimOnPolicyMixin:
         temperature: str | float,
         min_temperature: float,
         max_temperature: float,
-        interest: str,
-        preferences: str,
-        preference_bound: float,
         interest_coef: float,
+        policy_kwargs: dict[str, Any] | None,
+        _init_setup_model: bool,
     ) -> str | type[BasePolicy]:
         """Validate and store the 2D-RL arguments; returns the policy, a class made 2D (eq. 3-9) if needed."""
         check_positive_int("n_steps", n_steps)
@@ -92,8 +98,6 @@ class TwoDimOnPolicyMixin:
             check_non_negative("punishment_vf_coef", punishment_vf_coef)
         make_reward_split(reward_split)  # validates
         check_temperature(temperature, min_temperature, max_temperature)
-        check_interest_modes(interest, preferences)
-        check_positive("preference_bound", preference_bound)
         check_non_negative("interest_coef", interest_coef)
         self.punishment_gamma = punishment_gamma
         self.punishment_gae_lambda = gae_lambda if punishment_gae_lambda is None else punishment_gae_lambda
@@ -103,12 +107,25 @@ class TwoDimOnPolicyMixin:
         self.temperature = temperature
         self.min_temperature = min_temperature
         self.max_temperature = max_temperature
-        self.interest = interest
-        self.preferences = preferences
-        self.preference_bound = preference_bound
         self.interest_coef = interest_coef
+        passed = sorted(set(policy_kwargs or {}) & set(self._policy_two_dim_kwargs()))
+        if passed:
+            raise ValueError(
+                f"policy_kwargs must not hold {passed}: they are {type(self).__name__}'s own arguments, "
+                "which it passes to the policy"
+            )
+        # Set by the constructor, or by ``load`` from the file (None if the file has none: an older layout)
+        self._two_dim_format = SAVE_FORMAT if _init_setup_model else None
         self._carried_interest: tuple[Any, np.ndarray] | None = None
-        return policy if isinstance(policy, str) else two_dim_policy_class(policy)
+        return policy if isinstance(policy, str) else self._two_dim_policy_class(policy)
+
+    def _two_dim_policy_class(self, policy_class: type) -> type:
+        """The 2D-RL version of a user's ``ActorCriticPolicy`` subclass."""
+        return two_dim_policy_class(policy_class)
+
+    def _policy_two_dim_kwargs(self) -> dict[str, Any]:
+        """The policy's constructor arguments that are the algorithm's own (eq. 9's temperature settings)."""
+        return {name: getattr(self, name) for name in TEMPERATURE_ARGUMENTS}
 
     def _setup_model(self) -> None:
         if not issubclass(self.policy_class, TwoDimPolicyMixin):  # only a file of another algorithm gets here
@@ -116,6 +133,14 @@ class TwoDimOnPolicyMixin:
                 f"{type(self).__name__} cannot use the policy class {self.policy_class.__name__}, which has no "
                 "punishment critic: if you are loading a file, it holds a model saved by another algorithm "
                 "(e.g. stock A2C or PPO); load it with that algorithm's load"
+            )
+        if self._two_dim_format != SAVE_FORMAT:  # only ``load`` of a file saved by an older version gets here
+            raise ValueError(
+                f"this file was saved by an older sb3-twodrl (no save format, this version writes {SAVE_FORMAT}) and "
+                f"cannot be loaded by {type(self).__name__}: the arguments interest, preferences, preference_bound "
+                "and actor_update left the algorithms (ablation variants: sb3_twodrl.experiments.variants), the "
+                "temperature settings moved into the policy and the punishment critic starts at 0; retrain, or "
+                "load it with the version that saved it"
             )
         if self.rollout_buffer_class is None:
             is_dict = isinstance(self.observation_space, spaces.Dict)
@@ -127,17 +152,14 @@ class TwoDimOnPolicyMixin:
             punishment_gae_lambda=self.punishment_gae_lambda,
             punishment_weight=self.punishment_weight,
         )
-        super()._setup_model()  # type: ignore[misc]
-        if self.interest == "learned" and self.temperature == "interest":  # at a fixed temperature no head is needed
-            self.policy.add_interest_head()
-        self.policy.set_temperature(
-            self.temperature,
-            self.min_temperature,
-            self.max_temperature,
-            self.interest,
-            self.preferences,
-            self.preference_bound,
-        )
+        # The policy gets the algorithm's own arguments beside the user's policy_kwargs, which stay as given
+        # (SB3's ``load(..., policy_kwargs=...)`` compares them with the file's)
+        policy_kwargs = self.policy_kwargs
+        self.policy_kwargs = {**policy_kwargs, **self._policy_two_dim_kwargs()}
+        try:
+            super()._setup_model()  # type: ignore[misc]
+        finally:
+            self.policy_kwargs = policy_kwargs
 
     def _excluded_save_params(self) -> list[str]:
         return [*super()._excluded_save_params(), "_carried_interest"]  # type: ignore[misc]
@@ -172,14 +194,16 @@ class TwoDimOnPolicyMixin:
         return carried[1]
 
     def _rollout_log_probs(self, latent_pi: th.Tensor, distribution: Distribution, actions: th.Tensor) -> th.Tensor:
-        """The ``old_log_prob`` stored with each action: its log-probability under the raw preferences (``T = 1``).
+        """The ``old_log_prob`` stored with each action: its log-probability under the tempered
+        distribution that drew it (eq. 9), so that PPO's ratio is 1 at the first epoch."""
+        return distribution.log_prob(actions)
 
-        Eq. 10 updates the preferences whatever the temperature the action was drawn at, so the
-        policy being optimised is the untempered one: PPO's ratio compares it with itself before the
-        update (1 at the first epoch), not with the tempered sampling distribution.
-        ``distribution`` (tempered, from the same latent) is unused here.
-        """
-        return self.policy._get_action_dist_from_latent(latent_pi).log_prob(actions)
+    def _evaluate_actions(
+        self, observations: Any, actions: th.Tensor, inverse_temperatures: th.Tensor
+    ) -> tuple[th.Tensor, th.Tensor, th.Tensor | None, th.Tensor, th.Tensor | None]:
+        """``V_R``, ``V_P``, ``I(s)``, the actor's score and the entropy of a minibatch (the policy's
+        :meth:`~sb3_twodrl.common.policies.TwoDimPolicyMixin.evaluate_actions_two_dim`)."""
+        return self.policy.evaluate_actions_two_dim(observations, actions, inverse_temperatures)
 
     def collect_rollouts(
         self,

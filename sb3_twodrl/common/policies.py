@@ -1,12 +1,13 @@
-"""Actor-critic policies with a reward critic, a punishment critic and a tempered action distribution.
+"""Actor-critic policies with a reward critic, a punishment critic, an interest head and a tempered distribution.
 
 The actor keeps SB3's action network: its outputs are the preferences ``p(s, a)`` of eq. 9-10.
-Actions are drawn from the softmax of ``p / T`` (eq. 9), ``T`` set by the interest ``delta+``
-(eq. 2) in one of the modes of :mod:`sb3_twodrl.common.interest`, clamped to
-``[min_temperature, max_temperature]``. :class:`TwoDimPolicyMixin` adds the punishment head and the tempered
-distribution to any SB3 ``ActorCriticPolicy`` subclass
-(:func:`two_dim_policy_class`); the temperature settings are the algorithm's arguments, handed
-to the policy by :meth:`TwoDimPolicyMixin.set_temperature`.
+Actions are drawn from the softmax of ``p / T`` (eq. 9). With ``temperature="interest"``, ``T`` is
+set by the interest ``delta+`` (eq. 2) as :mod:`sb3_twodrl.common.interest` says: ``T = I(s) /
+mean(delta+)``, ``I(s)`` a head of the critic network that estimates ``E[delta+ | s]``, clamped to
+``[min_temperature, max_temperature]``; with a float, ``T`` is fixed. These are the policy's own
+constructor arguments (saved with it, so that ``Policy.load`` rebuilds the same heads); the
+algorithms pass theirs through. :class:`TwoDimPolicyMixin` adds all this to any SB3
+``ActorCriticPolicy`` subclass (:func:`two_dim_policy_class`).
 """
 
 import functools
@@ -26,27 +27,13 @@ from stable_baselines3.common.torch_layers import CombinedExtractor, NatureCNN
 from stable_baselines3.common.type_aliases import PyTorchObs
 from torch import nn
 
-from sb3_twodrl.common.interest import (
-    PREFERENCE_BOUND,
-    bounded_preferences,
-    check_interest_modes,
-    relative_interest,
-    updated_scale,
-)
-from sb3_twodrl.common.validation import check_positive, is_real
-
-INTEREST_EMA_RATE = 0.1
-"""Weight of the newest rollout's mean interest in the ``"paper"`` mode's running estimate used by ``predict``."""
-
-DEFAULT_TEMPERATURE: dict[str, Any] = dict(
-    temperature="interest", min_temperature=0.5, max_temperature=10.0, interest="paper", preferences="raw"
-)
-"""The algorithms' default temperature settings, which a policy has until the algorithm sets its own."""
+from sb3_twodrl.common.interest import relative_interest, updated_scale
+from sb3_twodrl.common.validation import is_real
 
 _GAUSSIANS = (DiagGaussianDistribution, StateDependentNoiseDistribution)
 
-TEMPERED_SCORES = ("tempered", "compensated", "compensated_skip_uniform")
-"""The scores of ``evaluate_actions_two_dim`` taken under the tempered distribution that drew the actions."""
+TEMPERATURE_ARGUMENTS = ("temperature", "min_temperature", "max_temperature")
+"""The policy's constructor arguments that the algorithms take as their own and pass through."""
 
 
 def check_temperature(temperature: str | float, min_temperature: float, max_temperature: float) -> None:
@@ -66,24 +53,28 @@ def check_temperature(temperature: str | float, min_temperature: float, max_temp
 
 class TwoDimPolicyMixin:
     """
-    Reward critic ``V_R`` (SB3's value head), punishment critic ``V_P`` (eq. 3-8) and the tempered
-    distribution of eq. 9, on top of an SB3 ``ActorCriticPolicy``.
+    Reward critic ``V_R`` (SB3's value head), punishment critic ``V_P`` (eq. 3-8), interest head
+    ``I(s)`` and the tempered distribution of eq. 9, on top of an SB3 ``ActorCriticPolicy``.
 
     ``V_P`` is a second linear head on SB3's critic network, beside ``V_R``'s: the two critics
-    share the critic's hidden layers (not the actor's) and have their own loss weights (a
-    separate network would cost a whole MLP pass per step; README, "Design notes"). The head is
-    initialised without touching the global RNG, so that a seeded run draws the same random
-    numbers as stock SB3.
+    share the critic's hidden layers (not the actor's) and have their own loss weights (README,
+    "Design notes"). It starts at exactly 0 (weights and bias 0): no punishment is expected before
+    one is seen, so on an env without punishments ``A_P`` stays 0 and the utility is ``A_R`` (a
+    randomly initialised ``V_P`` puts its own TD errors, noise, into the actor's advantage and the
+    critics' shared layers). With ``temperature="interest"`` a third linear head ``I(s)`` on the
+    critic network, fed a detached latent so that its loss does not flow into the critics' layers,
+    estimates ``E[delta+ | s]``. The heads are built without touching the global RNG, so that a
+    seeded run draws the same random numbers as stock SB3.
 
     ``predict_values`` keeps SB3's meaning (``V_R``). ``evaluate_actions`` and ``forward`` use the
     raw preferences (``T = 1``); rollout collection and ``predict`` sample from the tempered
-    distribution (eq. 9), ``predict`` with the running interest estimate saved with the policy
-    (in the ``"learned"`` mode, with the interest head's estimate for the state).
-    :meth:`add_interest_head` (the algorithm calls it in the ``"learned"`` mode) adds a third linear
-    head ``I(s)`` on the critic network, fed a detached latent so that its loss does not flow into
-    the critics' layers, and initialised without touching the global RNG.
+    distribution (eq. 9), ``predict`` at the interest head's estimate for the state.
     It relies only on what every ``ActorCriticPolicy`` has: ``mlp_extractor`` (``forward_actor``,
     ``forward_critic``, ``latent_dim_vf``), ``action_net``, ``value_net`` and ``action_dist``.
+
+    :param temperature: ``"interest"`` (eq. 9, ``T`` set by the interest) or a fixed positive temperature
+    :param min_temperature: floor of the interest temperature
+    :param max_temperature: ceiling of the interest temperature
     """
 
     # ActorCriticPolicy's attributes that the mixin uses
@@ -98,50 +89,50 @@ class TwoDimPolicyMixin:
     vf_features_extractor: nn.Module
     running_interest: th.Tensor
 
-    def __init__(self, *args: Any, **kwargs: Any):
-        self.set_temperature(**DEFAULT_TEMPERATURE)
-        self.interest_net: nn.Module | None = None
-        super().__init__(*args, **kwargs)
-
-    def set_temperature(
+    def __init__(
         self,
-        temperature: str | float,
-        min_temperature: float,
-        max_temperature: float,
-        interest: str = "paper",
-        preferences: str = "raw",
-        preference_bound: float = PREFERENCE_BOUND,
-    ) -> None:
-        """Set how the interest becomes the temperature of eq. 9 (the algorithm's arguments;
-        ``interest``, ``preferences`` and ``preference_bound``: :mod:`sb3_twodrl.common.interest`)."""
+        *args: Any,
+        temperature: str | float = "interest",
+        min_temperature: float = 0.5,
+        max_temperature: float = 10.0,
+        **kwargs: Any,
+    ):
         check_temperature(temperature, min_temperature, max_temperature)
-        check_interest_modes(interest, preferences)
-        check_positive("preference_bound", preference_bound)
-        if temperature == "interest" and interest == "learned" and getattr(self, "interest_net", None) is None:
-            raise ValueError('interest="learned" needs the interest head: call add_interest_head() first')
         self.temperature = temperature
         self.min_temperature = min_temperature
         self.max_temperature = max_temperature
-        self.interest = interest
-        self.preferences = preferences
-        self.preference_bound = preference_bound
+        super().__init__(*args, **kwargs)
 
-    def add_interest_head(self) -> None:
-        """Add the ``"learned"`` mode's head ``I(s)`` (estimate of ``E[delta+ | s]``) and give it to the optimizer."""
-        if self.interest_net is not None:
-            return
-        with th.random.fork_rng(devices=[]):
-            self.interest_net = nn.Linear(self.mlp_extractor.latent_dim_vf, 1).to(self.device)  # type: ignore[attr-defined]
-            if self.ortho_init:
-                self.interest_net.apply(partial(self.init_weights, gain=1))  # type: ignore[attr-defined]
-        self.optimizer.add_param_group({"params": list(self.interest_net.parameters())})  # type: ignore[attr-defined]
+    def _get_constructor_parameters(self) -> dict[str, Any]:
+        data = super()._get_constructor_parameters()  # type: ignore[misc]
+        data.update({name: getattr(self, name) for name in TEMPERATURE_ARGUMENTS})
+        return data
+
+    def _needs_interest_head(self) -> bool:
+        """Whether ``I(s)`` sets the temperature (not at a fixed temperature)."""
+        return self.temperature == "interest"
+
+    def _init_punishment_head(self, head: nn.Linear) -> None:
+        """``V_P`` starts at 0: no punishment expected before one is seen."""
+        nn.init.zeros_(head.weight)
+        nn.init.zeros_(head.bias)
+
+    def _new_head(self) -> nn.Linear:
+        """A linear head on the critic's latent, orthogonally initialised (gain 1) as SB3's value head."""
+        head = nn.Linear(self.mlp_extractor.latent_dim_vf, 1)
+        if self.ortho_init:
+            head.apply(partial(self.init_weights, gain=1))  # type: ignore[attr-defined]
+        return head
 
     def _build(self, lr_schedule: Any) -> None:
         super()._build(lr_schedule)  # type: ignore[misc]
         with th.random.fork_rng(devices=[]):
-            self.punishment_value_net = nn.Linear(self.mlp_extractor.latent_dim_vf, 1)
-            if self.ortho_init:
-                self.punishment_value_net.apply(partial(self.init_weights, gain=1))  # type: ignore[attr-defined]
+            self.punishment_value_net = self._new_head()
+            self._init_punishment_head(self.punishment_value_net)
+        self.interest_net: nn.Module | None = None
+        if self._needs_interest_head():
+            with th.random.fork_rng(devices=[]):
+                self.interest_net = self._new_head()
         self.register_buffer("running_interest", th.zeros(()))  # type: ignore[attr-defined]
         self.optimizer = self.optimizer_class(  # type: ignore[attr-defined]
             self.parameters(),  # type: ignore[attr-defined]
@@ -164,35 +155,21 @@ class TwoDimPolicyMixin:
         return None if self.interest_net is None else self.interest_net(latent_vf.detach())
 
     def evaluate_actions_two_dim(
-        self,
-        obs: PyTorchObs,
-        actions: th.Tensor,
-        score: str = "log_prob",
-        inverse_temperature: th.Tensor | None = None,
+        self, obs: PyTorchObs, actions: th.Tensor, inverse_temperature: th.Tensor
     ) -> tuple[th.Tensor, th.Tensor, th.Tensor | None, th.Tensor, th.Tensor | None]:
-        """``V_R``, ``V_P``, ``I(s)`` (None without a head), the actor's score of ``actions`` and the
-        entropy (eq. 10): the score is the log-probability under the raw preferences (``T = 1``), with
-        ``score="tempered"`` the log-probability and entropy under the tempered distribution the
-        actions were drawn from (eq. 9, at ``inverse_temperature``), with ``score="compensated"`` the
-        same values with the temperature's ``1/T`` taken out of their gradient, with
-        ``score="compensated_skip_uniform"`` those values but 0 for the actions drawn uniformly
-        (``1/T = 0``: the preferences played no part), or with ``score="preference"`` the preference
-        ``p(s, a)`` itself (``Discrete`` actions)."""
+        """``V_R``, ``V_P``, ``I(s)`` (None without a head), the actor's score of ``actions`` and the entropy.
+
+        The score is the log-probability under the tempered distribution that drew each action
+        (eq. 9, at its ``inverse_temperature``) with the ``1/T`` taken out of its gradient, so that
+        ``A * score`` moves the preferences by ``A * (1[a] - pi_T(.|s))`` at any ``T`` (eq. 10 as a
+        policy gradient of the policy that acted); the entropy likewise. An action drawn uniformly
+        (``1/T = 0``) scores 0: the preferences played no part in it.
+        """
         latent_pi, values, punishment_values, predicted = self.evaluate_state(obs)
-        if score in TEMPERED_SCORES:
-            if inverse_temperature is None:
-                raise ValueError(f"score={score!r} needs the inverse temperatures the actions were drawn with")
-            distribution = self.tempered_distribution(latent_pi, inverse_temperature, score != "tempered")
-        else:
-            distribution = self._get_action_dist_from_latent(latent_pi)  # type: ignore[attr-defined]
-        if score == "preference":
-            taken = self.action_net(latent_pi).gather(1, actions.long().view(-1, 1)).flatten()
-            return values, punishment_values, predicted, taken, distribution.entropy()
+        distribution = self.tempered_distribution(latent_pi, inverse_temperature, compensated=True)
         log_prob, entropy = distribution.log_prob(actions), distribution.entropy()
-        if score == "compensated_skip_uniform":
-            drawn = (th.as_tensor(inverse_temperature, device=log_prob.device).reshape(-1) > 0).to(log_prob.dtype)
-            log_prob, entropy = log_prob * drawn, None if entropy is None else entropy * drawn
-        return values, punishment_values, predicted, log_prob, entropy
+        drawn = (th.as_tensor(inverse_temperature, device=log_prob.device).reshape(-1) > 0).to(log_prob.dtype)
+        return values, punishment_values, predicted, log_prob * drawn, None if entropy is None else entropy * drawn
 
     def predict_critics(self, obs: PyTorchObs) -> tuple[th.Tensor, th.Tensor]:
         """Reward critic ``V_R(s)`` and punishment critic ``V_P(s)`` (eq. 3, 4)."""
@@ -205,27 +182,18 @@ class TwoDimPolicyMixin:
         return self.predict_critics(obs)[1]
 
     def inverse_temperature(self, interest: np.ndarray) -> np.ndarray:
-        """``1 / T`` of eq. 9 for each interest value (float32): ``delta+`` of the transition into the
-        state, or in the ``"learned"`` mode the head's ``I(s)``; divided by the running scale in the
-        ``"relative"`` and ``"learned"`` modes.
-
-        In the ``"paper"`` and ``"relative"`` modes an interest of exactly 0 gives uniform random
-        actions (``1/T = 0``), as the paper states; a Gaussian (gSDE's included) has no uniform
-        limit and takes ``max_temperature`` instead.
-        """
+        """``1 / T`` of eq. 9 for each interest value (float32): at ``temperature="interest"`` the head's
+        ``I(s)`` over the running mean of ``delta+`` (:func:`~sb3_twodrl.common.interest.relative_interest`),
+        clamped to ``[min_temperature, max_temperature]``; otherwise ``1 / temperature``."""
         if self.temperature != "interest":
             return np.full(np.shape(interest), 1.0 / self.temperature, dtype=np.float32)
         interest = np.asarray(interest, dtype=np.float32)
-        if self.interest != "paper":
-            interest = relative_interest(np.maximum(interest, 0.0), self.running_interest.item())
-        inverse = np.reciprocal(np.minimum(np.maximum(interest, self.min_temperature), self.max_temperature))
-        if self.interest == "learned":
-            return inverse
-        if isinstance(self.action_dist, _GAUSSIANS):
-            inverse[interest == 0] = 1.0 / self.max_temperature
-        else:
-            inverse *= interest > 0
-        return inverse
+        interest = relative_interest(np.maximum(interest, 0.0), self.running_interest.item())
+        return np.reciprocal(np.minimum(np.maximum(interest, self.min_temperature), self.max_temperature))
+
+    def _preferences(self, action_logits: th.Tensor) -> th.Tensor:
+        """What ``T`` divides in eq. 9: the actor's outputs (categorical actions)."""
+        return action_logits
 
     def tempered_distribution(
         self, latent_pi: th.Tensor, inverse_temperature: np.ndarray | th.Tensor, compensated: bool = False
@@ -244,8 +212,7 @@ class TwoDimPolicyMixin:
             return self.action_dist.proba_distribution(mean_actions, self.log_std, latent_pi / inverse)
         if isinstance(self.action_dist, DiagGaussianDistribution):
             return self.action_dist.proba_distribution(mean_actions, self.log_std - th.log(inverse))
-        if self.preferences == "bounded":
-            mean_actions = bounded_preferences(mean_actions, self.preference_bound)
+        mean_actions = self._preferences(mean_actions)
         if compensated:
             logits = mean_actions.detach() * inverse + (mean_actions - mean_actions.detach())
         else:
@@ -253,25 +220,18 @@ class TwoDimPolicyMixin:
         return self.action_dist.proba_distribution(action_logits=logits)  # type: ignore[call-arg]
 
     def update_interest_scale(self, interest: np.ndarray, dones: np.ndarray) -> None:
-        """``"relative"``/``"learned"``: fold one vectorised step's interest into the running scale."""
-        if self.interest != "paper":
-            self.running_interest.fill_(updated_scale(self.running_interest.item(), interest, dones))
+        """Fold one vectorised step's interest into the running mean of ``delta+`` that scales ``I(s)``."""
+        self.running_interest.fill_(updated_scale(self.running_interest.item(), interest, dones))
 
     def update_running_interest(self, mean_interest: float) -> None:
-        """``"paper"``: fold one rollout's mean interest into the estimate that ``predict`` uses."""
-        if self.interest != "paper":
-            return
-        running = self.running_interest.item()
-        self.running_interest.fill_(
-            mean_interest if running == 0.0 else running + INTEREST_EMA_RATE * (mean_interest - running)
-        )
+        """Called with each rollout's mean interest; the default keeps no per-rollout estimate."""
 
     def _actor_latent(self, obs: PyTorchObs) -> th.Tensor:
         features = BaseModel.extract_features(self, obs, self.pi_features_extractor)  # type: ignore[arg-type]
         return self.mlp_extractor.forward_actor(features)
 
     def _running_distribution(self, obs: PyTorchObs, latent_pi: th.Tensor) -> Distribution:
-        if self.interest_net is None or self.interest != "learned":
+        if self.interest_net is None:
             interest = np.full(len(latent_pi), self.running_interest.item(), dtype=np.float32)
         else:
             features = BaseModel.extract_features(self, obs, self.vf_features_extractor)  # type: ignore[arg-type]
@@ -280,11 +240,11 @@ class TwoDimPolicyMixin:
         return self.tempered_distribution(latent_pi, self.inverse_temperature(interest))
 
     def get_distribution(self, obs: PyTorchObs) -> Distribution:
-        """Tempered action distribution (eq. 9) at the running interest estimate (``"learned"``: at ``I(s)``)."""
+        """Tempered action distribution (eq. 9) at the interest head's ``I(s)`` (or the fixed temperature)."""
         return self._running_distribution(obs, self._actor_latent(obs))
 
     def _predict(self, observation: PyTorchObs, deterministic: bool = False) -> th.Tensor:
-        """Sample at the running interest, or take the argmax of the raw preferences if ``deterministic``."""
+        """Sample from the tempered distribution, or take the argmax of the raw preferences if ``deterministic``."""
         latent_pi = self._actor_latent(observation)
         if deterministic:
             return self._get_action_dist_from_latent(latent_pi).get_actions(deterministic=True)  # type: ignore[attr-defined]

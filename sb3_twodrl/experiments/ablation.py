@@ -3,7 +3,8 @@
 Every arm is a grid of (arm, seed) runs of :func:`~sb3_twodrl.experiments.runner.run_pair`
 (epochs of K learning trials and M test trials, batched envs, resume), in ``<out>/<arm>/``. All arms
 share the protocol's settings (the packaged ``a2c.yml`` and ``twoda2c.yml``, whose Nomad entries
-differ only in the 2D-RL arguments); an arm changes only these:
+differ only in the 2D-RL arguments); an arm changes only these (every 2D arm runs
+:class:`~sb3_twodrl.experiments.variants.VariantTwoDimA2C`, where its modes live):
 
 1. ``a2c``: SB3's A2C.
 2. ``a2c_fixed``: A2C at a fixed temperature: TwoDimA2C with ``reward_split="none"`` (the whole
@@ -14,7 +15,7 @@ differ only in the 2D-RL arguments); an arm changes only these:
    with the actor update ``"log_prob"`` (the default before the compensated score), pinned (arms
    2-5 and the relative ones too).
 5. ``relative_bounded``, ``relative_raw``, ``learned_bounded``: the options of
-   :mod:`sb3_twodrl.common.interest`; ``relative_bound25``: the relative interest on preferences
+   :mod:`sb3_twodrl.experiments.variants`; ``relative_bound25``: the relative interest on preferences
    bounded to an sd of 2.5 with the floor at 1 (exploratory, derived in ``docs/ablation.md``);
    ``paper_eq10`` and ``bound25_eq10``: ``paper`` and ``relative_bound25`` with eq. 10 taken
    literally (``actor_update="preference"``; exploratory); ``paper_tempered``: ``paper`` with the
@@ -24,6 +25,8 @@ differ only in the 2D-RL arguments); an arm changes only these:
    ``relative_skip_uniform``: the relative interest on raw preferences with that update;
    ``learned_skip_uniform``: the learned per-state interest on raw preferences with that update;
    ``twod_fixed_compensated``: ``twod_fixed`` with that update (at a fixed ``T`` no move is uniform).
+6. ``twoda2c``: the shipped ``TwoDimA2C`` itself (``V_P`` starts at 0, where the variants keep its
+   orthogonal initialisation); ``twoda2c_fixed``: it at a fixed temperature.
 
 The fixed arms run after the ``paper`` arm, whose mean temperature over all its learning steps
 (``mean_temperature`` of the rows, weighted by steps) they take unless ``--fixed-temperature`` is
@@ -56,21 +59,29 @@ from sb3_twodrl.hyperparams import hyperparams_path
 _LOG_PROB_SCORE = {"actor_update": "log_prob"}
 """The actor update every arm but ``paper_tempered``, ``paper_compensated`` and the eq. 10 arms ran with
 (the default then): pinned, so that the arms keep their rows whatever the default becomes."""
+_VARIANT = "twoda2c_variant"
+"""Every 2D arm runs :class:`~sb3_twodrl.experiments.variants.VariantTwoDimA2C` (hyperparameters of
+``twoda2c.yml``): the arms' interest modes, preferences and actor updates are variants, and they ran
+with ``V_P``'s orthogonal initialisation, which the variants keep."""
+_BASE_ALGO = {_VARIANT: "twoda2c"}
+"""Whose hyperparameter file an arm's algorithm takes."""
 
 ARMS: dict[str, tuple[str, dict[str, Any]]] = {
     "a2c": ("a2c", {}),
+    "twoda2c": ("twoda2c", {}),
+    "twoda2c_fixed": ("twoda2c", {}),
     "a2c_fixed": (
-        "twoda2c",
+        _VARIANT,
         {"reward_split": "none", "punishment_weight": 0.0, "punishment_vf_coef": 0.0, **_LOG_PROB_SCORE},
     ),
-    "twod_fixed": ("twoda2c", {**_LOG_PROB_SCORE}),
-    "twod_fixed_compensated": ("twoda2c", {"actor_update": "compensated_skip_uniform"}),
-    "paper": ("twoda2c", {"interest": "paper", "preferences": "raw", **_LOG_PROB_SCORE}),
-    "relative_bounded": ("twoda2c", {"interest": "relative", "preferences": "bounded", **_LOG_PROB_SCORE}),
-    "relative_raw": ("twoda2c", {"interest": "relative", "preferences": "raw", **_LOG_PROB_SCORE}),
-    "learned_bounded": ("twoda2c", {"interest": "learned", "preferences": "bounded", **_LOG_PROB_SCORE}),
+    "twod_fixed": (_VARIANT, {**_LOG_PROB_SCORE}),
+    "twod_fixed_compensated": (_VARIANT, {"actor_update": "compensated_skip_uniform"}),
+    "paper": (_VARIANT, {"interest": "paper", "preferences": "raw", **_LOG_PROB_SCORE}),
+    "relative_bounded": (_VARIANT, {"interest": "relative", "preferences": "bounded", **_LOG_PROB_SCORE}),
+    "relative_raw": (_VARIANT, {"interest": "relative", "preferences": "raw", **_LOG_PROB_SCORE}),
+    "learned_bounded": (_VARIANT, {"interest": "learned", "preferences": "bounded", **_LOG_PROB_SCORE}),
     "relative_bound25": (
-        "twoda2c",
+        _VARIANT,
         {
             "interest": "relative",
             "preferences": "bounded",
@@ -79,23 +90,23 @@ ARMS: dict[str, tuple[str, dict[str, Any]]] = {
             **_LOG_PROB_SCORE,
         },
     ),
-    "paper_eq10": ("twoda2c", {"interest": "paper", "preferences": "raw", "actor_update": "preference"}),
-    "paper_tempered": ("twoda2c", {"interest": "paper", "preferences": "raw", "actor_update": "tempered"}),
-    "paper_compensated": ("twoda2c", {"interest": "paper", "preferences": "raw", "actor_update": "compensated"}),
+    "paper_eq10": (_VARIANT, {"interest": "paper", "preferences": "raw", "actor_update": "preference"}),
+    "paper_tempered": (_VARIANT, {"interest": "paper", "preferences": "raw", "actor_update": "tempered"}),
+    "paper_compensated": (_VARIANT, {"interest": "paper", "preferences": "raw", "actor_update": "compensated"}),
     "paper_skip_uniform": (
-        "twoda2c",
+        _VARIANT,
         {"interest": "paper", "preferences": "raw", "actor_update": "compensated_skip_uniform"},
     ),
     "relative_skip_uniform": (
-        "twoda2c",
+        _VARIANT,
         {"interest": "relative", "preferences": "raw", "actor_update": "compensated_skip_uniform"},
     ),
     "learned_skip_uniform": (
-        "twoda2c",
+        _VARIANT,
         {"interest": "learned", "preferences": "raw", "actor_update": "compensated_skip_uniform"},
     ),
     "bound25_eq10": (
-        "twoda2c",
+        _VARIANT,
         {
             "interest": "relative",
             "preferences": "bounded",
@@ -105,11 +116,11 @@ ARMS: dict[str, tuple[str, dict[str, Any]]] = {
         },
     ),
 }
-FIXED = ("a2c_fixed", "twod_fixed", "twod_fixed_compensated")
+FIXED = ("a2c_fixed", "twod_fixed", "twod_fixed_compensated", "twoda2c_fixed")
 """Arms acting at a fixed temperature (that of the ``paper`` arm), raw preferences."""
 DEFAULT_ARMS = ("a2c", "a2c_fixed", "twod_fixed", "paper", "learned_skip_uniform")
 """Issue 11's five arms: A2C, A2C and TwoDimA2C at the paper arm's mean temperature, eq. 9 as the paper
-writes it, and TwoDimA2C's default (``interest="learned"``, pinned so that the arm keeps its rows)."""
+writes it, and TwoDimA2C's default of its time (``interest="learned"``, pinned so that the arm keeps its rows)."""
 METRICS = (
     "learned",
     "final_goal_rate",
@@ -125,11 +136,13 @@ def arm_hyperparams(arm: str, base: dict[str, dict[str, Any]], temperature: floa
     if arm not in ARMS:
         raise ValueError(f"arm must be one of {sorted(ARMS)}, got {arm!r}")
     algo, overrides = ARMS[arm]
-    hp = {**base[algo], **overrides}
+    hp = {**base[_BASE_ALGO.get(algo, algo)], **overrides}
     if arm in FIXED:
         if temperature is None or not temperature > 0:
             raise ValueError(f"arm {arm!r} needs a positive fixed temperature, got {temperature!r}")
-        hp.update(temperature=float(temperature), preferences="raw")
+        hp["temperature"] = float(temperature)
+        if algo == _VARIANT:
+            hp["preferences"] = "raw"
     return algo, hp
 
 

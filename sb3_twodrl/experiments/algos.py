@@ -1,14 +1,19 @@
-"""Algorithm names of the experiment runner: the package's table :data:`sb3_twodrl.ALGOS`."""
+"""Algorithm names of the experiment runner: the package's table :data:`sb3_twodrl.ALGOS` and the ablation's
+variants (:data:`sb3_twodrl.experiments.variants.VARIANT_ALGOS`)."""
 
 from __future__ import annotations
 
 from stable_baselines3.common.base_class import BaseAlgorithm
 
-from sb3_twodrl import ALGOS
+from sb3_twodrl import ALGOS as PACKAGE_ALGOS
+from sb3_twodrl.experiments.variants import VARIANT_ALGOS
+
+ALGOS: dict[str, type[BaseAlgorithm]] = {**PACKAGE_ALGOS, **VARIANT_ALGOS}
+"""Every algorithm the experiment commands can run, by name."""
 
 
 def algo_class(name: str) -> type[BaseAlgorithm]:
-    """The class registered as ``name`` in :data:`sb3_twodrl.ALGOS`."""
+    """The class registered as ``name`` in :data:`ALGOS`."""
     if name not in ALGOS:
         raise ValueError(f"algo must be one of {sorted(ALGOS)}, got {name!r}")
     return ALGOS[name]

@@ -7,7 +7,6 @@ import torch as th
 from gymnasium import spaces
 from stable_baselines3 import PPO
 from stable_baselines3.common.buffers import RolloutBuffer
-from stable_baselines3.common.distributions import Distribution
 from stable_baselines3.common.policies import ActorCriticPolicy, BasePolicy
 from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback, Schedule
 from stable_baselines3.common.utils import explained_variance
@@ -15,13 +14,11 @@ from torch.nn import functional as F
 
 from sb3_twodrl.common.buffers import TwoDimRolloutBuffer
 from sb3_twodrl.common.on_policy import TwoDimOnPolicyMixin
-from sb3_twodrl.common.policies import TEMPERED_SCORES, TwoDimActorCriticPolicy
+from sb3_twodrl.common.policies import TwoDimActorCriticPolicy
 from sb3_twodrl.common.splitting import RewardSplit
 from sb3_twodrl.ppo.policies import CnnPolicy, MlpPolicy, MultiInputPolicy
 
 SelfTwoDimPPO = TypeVar("SelfTwoDimPPO", bound="TwoDimPPO")
-
-ACTOR_UPDATES = ("log_prob", *TEMPERED_SCORES)
 
 
 def _clipped(values: th.Tensor, old_values: th.Tensor, clip_range_vf: float | None) -> th.Tensor:
@@ -39,8 +36,9 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
     critic ``V_P`` (discount ``punishment_gamma``) learn the two evaluations (eq. 3-8), actions are
     drawn at the interest temperature of eq. 9. PPO's clipped surrogate is taken on the utility
     advantage ``A_R - punishment_weight * A_P`` (eq. 1 with GAE per stream; normalised per minibatch
-    if ``normalize_advantage``); by default the ratio is that of the raw preferences (``T = 1``,
-    eq. 10), with ``actor_update`` that of the tempered policy that drew the actions. Each critic
+    if ``normalize_advantage``); the ratio is that of the tempered policy that drew each action, its
+    gradient with the ``1/T`` taken out and 1 for an action drawn uniformly (``TwoDimA2C``'s score,
+    eq. 10 as a policy gradient). Each critic
     regresses on its own TD(lambda) target and, with ``clip_range_vf``, is clipped around its own
     rollout values.
 
@@ -54,19 +52,10 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
     :param reward_split: how ``(reward, info)`` becomes ``(r_R, r_P)``: ``"auto"``, ``"info"``,
         ``"cost"``, ``"sign"``, ``"none"`` (``r_R = r``, ``r_P = 0``) or a callable
         (see ``sb3_twodrl.common.splitting``)
-    :param temperature: ``"interest"`` (eq. 9, ``T`` set by the interest) or a fixed positive temperature
-    :param interest: how the interest sets ``T``: ``"paper"``, ``"relative"`` or ``"learned"`` (as ``TwoDimA2C``)
-    :param preferences: ``"raw"`` or ``"bounded"`` preferences (as ``TwoDimA2C``)
-    :param preference_bound: the largest sd over the actions of ``"bounded"`` preferences
-    :param interest_coef: loss weight of the ``"learned"`` mode's interest head
-    :param actor_update: whose ratio the surrogate clips: ``"log_prob"`` (default: the raw
-        preferences' at ``T = 1``, compared with themselves before the update), ``"tempered"`` (the
-        tempered policy ``pi_T`` that drew each action, the behaviour policy), ``"compensated"`` (that
-        ratio, its gradient times the action's ``T``, as ``TwoDimA2C``'s) or
-        ``"compensated_skip_uniform"`` (that, with ratio 1 and no gradient for an episode's uniform
-        first move, ``1/T = 0``)
+    :param temperature: ``"interest"`` (eq. 9, as ``TwoDimA2C``'s) or a fixed positive temperature
     :param min_temperature: floor of the interest temperature
     :param max_temperature: ceiling of the interest temperature
+    :param interest_coef: loss weight of the interest head ``I(s)`` (its target is ``delta+``)
     """
 
     policy_aliases: ClassVar[dict[str, type[BasePolicy]]] = {
@@ -112,16 +101,9 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
         temperature: str | float = "interest",
         min_temperature: float = 0.5,
         max_temperature: float = 10.0,
-        interest: str = "paper",
-        preferences: str = "raw",
-        preference_bound: float = 1.0,
         interest_coef: float = 0.5,
-        actor_update: str = "log_prob",
         _init_setup_model: bool = True,
     ):
-        if actor_update not in ACTOR_UPDATES:
-            raise ValueError(f"actor_update must be one of {ACTOR_UPDATES}, got {actor_update!r}")
-        self.actor_update = actor_update
         policy = self._init_two_dim(
             policy,
             n_steps=n_steps,
@@ -137,10 +119,9 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
             temperature=temperature,
             min_temperature=min_temperature,
             max_temperature=max_temperature,
-            interest=interest,
-            preferences=preferences,
-            preference_bound=preference_bound,
             interest_coef=interest_coef,
+            policy_kwargs=policy_kwargs,
+            _init_setup_model=_init_setup_model,
         )
         super().__init__(
             policy,
@@ -171,12 +152,9 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
             _init_setup_model=_init_setup_model,
         )
 
-    def _rollout_log_probs(self, latent_pi: th.Tensor, distribution: Distribution, actions: th.Tensor) -> th.Tensor:
-        """``"log_prob"``: under the raw preferences (the mixin's); otherwise under the tempered
-        distribution that drew the action, so that the ratio is 1 at the first epoch."""
-        if self.actor_update == "log_prob":
-            return super()._rollout_log_probs(latent_pi, distribution, actions)
-        return distribution.log_prob(actions)
+    def _old_log_prob(self, rollout_data: Any) -> th.Tensor:
+        """The rollout's log-probabilities, 0 (ratio 1, as the score) for the actions drawn uniformly."""
+        return rollout_data.old_log_prob * (rollout_data.inverse_temperatures > 0)
 
     def train(self) -> None:
         """PPO's epochs of minibatch updates: clipped surrogate on the utility, each critic on its own target."""
@@ -197,12 +175,10 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
                 if isinstance(self.action_space, spaces.Discrete):
                     actions = rollout_data.actions.long().flatten()
 
-                values, punishment_values, predicted, log_prob, entropy = self.policy.evaluate_actions_two_dim(
-                    rollout_data.observations, actions, self.actor_update, rollout_data.inverse_temperatures
+                values, punishment_values, predicted, log_prob, entropy = self._evaluate_actions(
+                    rollout_data.observations, actions, rollout_data.inverse_temperatures
                 )
-                old_log_prob = rollout_data.old_log_prob
-                if self.actor_update == "compensated_skip_uniform":  # masked as the score is: ratio 1
-                    old_log_prob = old_log_prob * (rollout_data.inverse_temperatures > 0)
+                old_log_prob = self._old_log_prob(rollout_data)
                 advantages = rollout_data.advantages
                 if self.normalize_advantage and len(advantages) > 1:  # SB3 GitHub issue #325
                     advantages = (advantages - advantages.mean()) / (advantages.std() + 1e-8)
@@ -232,7 +208,7 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
                     + self.vf_coef * value_loss
                     + self.punishment_vf_coef * punishment_value_loss
                 )
-                if predicted is not None:  # the head learns E[delta+ | s] (sb3_twodrl.common.interest, "learned")
+                if predicted is not None:  # the head learns E[delta+ | s] (sb3_twodrl.common.interest)
                     interest_loss = F.mse_loss(rollout_data.interests, predicted.flatten())
                     interest_losses.append(interest_loss.item())
                     loss = loss + self.interest_coef * interest_loss

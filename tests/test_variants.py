@@ -1,0 +1,92 @@
+"""The ablation's variants (``sb3_twodrl.experiments.variants``): every arm builds and runs, and its
+committed rows come back from its command (``docs/ablation.md``)."""
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from gymnasium.wrappers import TimeLimit
+from stable_baselines3.common.env_util import make_vec_env
+
+from sb3_twodrl import TwoDimA2C, TwoDimPPO
+from sb3_twodrl.experiments import ablation
+from sb3_twodrl.experiments.algos import algo_class
+from sb3_twodrl.experiments.grid import collect_results
+from sb3_twodrl.experiments.variants import VariantTwoDimA2C, VariantTwoDimPPO
+from tests.toy_envs import LatticeCorridor
+
+FIGURES = Path(__file__).resolve().parents[1] / "docs" / "figures"
+BASE = {"a2c": {"n_envs": 2, "n_steps": 8}, "twoda2c": {"n_envs": 2, "n_steps": 8, "punishment_gamma": 0.1}}
+
+
+@pytest.mark.parametrize("arm", sorted(set(ablation.ARMS) - {"a2c"}))
+def test_every_arm_builds_and_runs(arm: str) -> None:
+    """A few hundred steps of each arm's algorithm on a small env, its variant settings in force."""
+    algo, hp = ablation.arm_hyperparams(arm, BASE, temperature=0.7)
+    n_envs = hp.pop("n_envs")
+    env = make_vec_env(lambda: TimeLimit(LatticeCorridor(5, 3), 30), n_envs=n_envs, seed=0)
+    model = algo_class(algo)("MlpPolicy", env, seed=0, **hp).learn(320)
+    assert isinstance(model, VariantTwoDimA2C)
+    for name in ("interest", "preferences", "actor_update"):
+        if name in hp:
+            assert getattr(model, name) == hp[name]
+    for name in ("interest", "preferences"):
+        assert getattr(model.policy, name) == getattr(model, name)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        (dict(interest="surprise"), "interest must be one of"),
+        (dict(preferences="softmax"), "preferences must be one of"),
+        (dict(preference_bound=0.0), "preference_bound"),
+        (dict(actor_update="preferences"), "actor_update must be one of"),
+    ],
+)
+def test_bad_variant_settings_are_named(kwargs: dict, match: str) -> None:
+    with pytest.raises(ValueError, match=match):
+        VariantTwoDimA2C("MlpPolicy", LatticeCorridor(), **kwargs)
+
+
+def test_the_ppo_variant_has_no_preference_update() -> None:
+    with pytest.raises(ValueError, match="actor_update must be one of"):
+        VariantTwoDimPPO("MlpPolicy", "CartPole-v1", actor_update="preference")
+
+
+def test_the_core_algorithms_take_no_variant_argument() -> None:
+    for cls in (TwoDimA2C, TwoDimPPO):
+        for name in ("interest", "preferences", "preference_bound", "actor_update"):
+            with pytest.raises(TypeError, match=name):
+                cls("MlpPolicy", "CartPole-v1", **{name: None})
+
+
+def test_the_tabular_oracle_setting() -> None:
+    """Eq. 9 and eq. 10 as the paper writes them: the transition's ``delta+`` as ``T``, the preference as score."""
+    model = VariantTwoDimA2C("MlpPolicy", LatticeCorridor(), interest="paper", actor_update="preference", seed=0)
+    model.learn(64)
+    assert model.policy.interest_net is None and model.policy.interest == "paper"
+    assert model.policy.inverse_temperature(np.zeros(1)) == 0  # an interest of 0 (a first move): uniform
+
+
+ROWS = [  # (arm, committed results file, seed): one row per kind of variant, its epoch 1
+    ("learned_skip_uniform", "ablation_learned_skip_uniform_results.csv", 0),
+    ("relative_skip_uniform", "ablation_relative_skip_uniform_results.csv", 0),
+    ("paper_skip_uniform", "ablation_skip_uniform_results.csv", 10),
+    ("paper_tempered", "ablation_ent200_results.csv", 0),
+    ("paper", "ablation_ent_results.csv", 0),  # actor_update="log_prob"
+    ("relative_bounded", "ablation_ent_results.csv", 0),
+]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("arm", "results", "seed"), ROWS)
+def test_a_committed_row_comes_back_from_its_command(tmp_path: Path, arm: str, results: str, seed: int) -> None:
+    """``sb3-twodrl-ablation --arms <arm> --seeds <seed> --epochs 1`` gives the committed epoch-1 row exactly."""
+    committed = pd.read_csv(FIGURES / results)
+    row = committed[(committed["arm"] == arm) & (committed["seed"] == seed) & (committed["epoch"] == 1)].iloc[0]
+    argv = ["--out", str(tmp_path), "--seeds", str(seed), "--epochs", "1", "--backend", "serial", "--arms", arm]
+    ablation.ablation(argv)
+    ran = collect_results(tmp_path / arm).iloc[0]
+    for key in ("env_steps", "goal_rate", "reward_per_step", "interest_share", "mean_temperature"):
+        assert ran[key] == pytest.approx(row[key], rel=1e-12), key
