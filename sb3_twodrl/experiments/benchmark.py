@@ -26,13 +26,14 @@ import math
 import multiprocessing as mp
 import shutil
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from sb3_twodrl.experiments.checkpoint import atomic_write_bytes
 from sb3_twodrl.experiments.intervals import mean_ci, welch_ci
 from sb3_twodrl.experiments.non_regression import EVAL_SEED, check_settings
 
@@ -170,8 +171,7 @@ def training_episodes(run_dir: Path, n_envs: int, events: str | None) -> np.ndar
             for record in csv.DictReader(f):
                 steps += int(record["l"])
                 rows.append((steps * n_envs, float(record["r"]), float(record[events]) if events else 0.0))
-    episodes = np.array(sorted(rows), dtype=np.float64).reshape(-1, 3)
-    return episodes
+    return np.array(sorted(rows), dtype=np.float64).reshape(-1, 3)
 
 
 def learning_curve(episodes: np.ndarray, n_timesteps: int, bins: int = CURVE_BINS) -> list[list[float]]:
@@ -291,8 +291,9 @@ def table(task_name: str, rows: Sequence[Row]) -> str:
     by_arm: dict[str, dict[int, Row]] = {}
     for row in rows:
         by_arm.setdefault(row["arm"], {})[row["seed"]] = row
-    head = "| task | budget | stock | return | 2D-RL arm | return | 2D - stock [95% Welch] |"
-    lines = [head + " events/ep in training: stock | 2D | 2D - stock | rl-zoo3 published |", "|" + "---|" * 11]
+    head = "| task | budget | stock arm | return | 2D-RL arm | return | 2D - stock [95% Welch] |"
+    head += " training events/episode, stock | 2D | 2D - stock | rl-zoo3 published (v2 where marked) |"
+    lines = [head, "|" + "---|" * 11]
     for arm in sorted(by_arm):
         algo, _ = split_arm(spec, arm)
         stock = STOCK.get(algo)
@@ -354,7 +355,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--episodes", type=int, default=20, help="deterministic evaluation episodes per final model")
     p.add_argument("--n-timesteps", type=int, help="training budget (default: the task's rl-zoo3 entry)")
     p.add_argument("--out", type=Path, default=Path("results") / "benchmark")
-    p.add_argument("--workers", type=int, default=1)
+    p.add_argument("--workers", type=int, default=1, help="worker processes (0: train in this process)")
     p.add_argument("--no-figure", action="store_true", help="skip the learning-curve figure (no matplotlib)")
     args = p.parse_args(argv)
     spec = task(args.env)
@@ -368,8 +369,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         raise ValueError(f"episodes must be >= 1, got {args.episodes}")
     if args.n_timesteps is not None and args.n_timesteps < 1:
         raise ValueError(f"n_timesteps must be >= 1, got {args.n_timesteps}")
-    if args.workers < 1:
-        raise ValueError(f"workers must be >= 1, got {args.workers}")
+    if args.workers < 0:
+        raise ValueError(f"workers must be >= 0, got {args.workers}")
     return args
 
 
@@ -378,6 +379,20 @@ def settings(args: argparse.Namespace) -> dict[str, str]:
     spec = task(args.env)
     kept = {"n_timesteps": args.n_timesteps, "episodes": args.episodes}
     return {a: json.dumps({"entry": zoo_entry(spec, a), **kept}, sort_keys=True, default=str) for a in args.algos}
+
+
+def _run(
+    todo: list[tuple[str, int]], task_name: str, runs: str, episodes: int, n_timesteps: int | None, workers: int
+) -> Iterator[tuple[str, int, Row]]:
+    """``(arm, seed, row)`` of every job as it finishes: in this process (``workers=0``) or in a spawned pool."""
+    if workers == 0 or not todo:
+        for arm, seed in todo:
+            yield arm, seed, train_and_evaluate(task_name, arm, seed, runs, episodes, n_timesteps)
+        return
+    with cf.ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn")) as pool:
+        jobs = {pool.submit(train_and_evaluate, task_name, a, s, runs, episodes, n_timesteps): (a, s) for a, s in todo}
+        for job in cf.as_completed(jobs):
+            yield (*jobs[job], job.result())
 
 
 def benchmark(argv: list[str] | None = None) -> list[Row]:
@@ -390,17 +405,10 @@ def benchmark(argv: list[str] | None = None) -> list[Row]:
     done: dict[str, Row] = json.loads(store.read_text()) if store.exists() else {}
     todo = [(a, s) for s in args.seeds for a in args.algos if f"{a}_seed{s}" not in done]
     runs = str(out / "runs")
-    with cf.ProcessPoolExecutor(max_workers=args.workers, mp_context=mp.get_context("spawn")) as pool:
-        jobs = {
-            pool.submit(train_and_evaluate, args.env, a, s, runs, args.episodes, args.n_timesteps): (a, s)
-            for a, s in todo
-        }
-        for job in cf.as_completed(jobs):
-            arm, seed = jobs[job]
-            row = job.result()
-            done[f"{arm}_seed{seed}"] = row
-            store.write_text(json.dumps(done, indent=1, sort_keys=True))
-            print(f"{arm} seed {seed}: return {row['final_return']:.1f} ({row['wall_s']:.0f} s)", flush=True)
+    for arm, seed, row in _run(todo, args.env, runs, args.episodes, args.n_timesteps, args.workers):
+        done[f"{arm}_seed{seed}"] = row
+        atomic_write_bytes(store, json.dumps(done, indent=1, sort_keys=True).encode())  # a kill keeps the old file
+        print(f"{arm} seed {seed}: return {row['final_return']:.1f} ({row['wall_s']:.0f} s)", flush=True)
     rows = [done[f"{a}_seed{s}"] for a in args.algos for s in args.seeds]
     write_rows_csv(list(done.values()), out / "rows.csv")
     text = table(args.env, list(done.values()))
