@@ -24,6 +24,7 @@ from sb3_twodrl.experiments.benchmark import (
     table,
     train_and_evaluate,
     training_episodes,
+    verdict,
     zoo_entry,
 )
 
@@ -198,6 +199,7 @@ def test_entries_share_the_stock_settings_and_refuse_a_rescaled_info_split() -> 
 def test_table_pairs_each_2d_arm_with_its_stock_arm() -> None:
     rows = [
         {"arm": arm, "seed": s, "final_return": ret + s, "train_events_per_episode": ev, "n_timesteps": 100}
+        | {"final_length": 13 + 2 * s, "final_events": 0.0}
         for arm, ret, ev in (("a2c", -20.0, 1.0), ("twoda2c", -15.0, 0.5), ("twoda2c-sign", -30.0, 2.0))
         for s in range(3)
     ]
@@ -205,3 +207,17 @@ def test_table_pairs_each_2d_arm_with_its_stock_arm() -> None:
     assert "| CliffWalking | 100 | a2c | -19.0 [" in text
     assert "| twoda2c | -14.0 [-16.5, -11.5] (n=3) | +5.0 [+2.7, +7.3] |" in text
     assert "| twoda2c-sign |" in text and "-0.500" in text
+    assert "| a2c | 1/3 [0.06, 0.79] | 1/3 [0.06, 0.79] | 1/3 [0.06, 0.79] | 0/3 [0.00, 0.56] |" in text
+
+
+def test_verdict_follows_the_pre_registered_rule() -> None:
+    base, up, down = [0.0, 1.0, 2.0, 3.0, 4.0], [10.0, 11.0, 12.0, 13.0, 14.0], [-10.0, -9.0, -8.0, -7.0, -6.0]
+    assert verdict(up, base, base, base) == "helps"  # return interval above 0
+    assert verdict(base, base, down, base) == "helps"  # fewer events, no loss of return
+    assert verdict(down, base, base, base) == "hurts"
+    assert verdict(base, base, up, base) == "hurts"  # more events
+    assert verdict(up, base, up, base) == "trade-off"  # rules 1 and 2 both hold: more return, more events
+    assert verdict(down, base, down, base) == "hurts"  # fewer events at a loss of return: rule 1 needs no loss
+    assert verdict(base, base[::-1], base, base) == "no difference shown"
+    assert verdict(up, base, [], []) == "helps"  # a task without events
+    assert verdict(up[:4], base[:4], [], []).startswith("no verdict")

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from sb3_twodrl.experiments.checkpoint import atomic_write_bytes
-from sb3_twodrl.experiments.intervals import mean_ci, welch_ci
+from sb3_twodrl.experiments.intervals import mean_ci, welch_ci, wilson
 from sb3_twodrl.experiments.non_regression import EVAL_SEED, check_settings
 
 Row = dict[str, Any]
@@ -61,6 +61,8 @@ class Task:
     """The ``info`` key holding the episode's punishment events so far (recorded by the Monitor)."""
     overrides: dict[str, Any] = field(default_factory=dict)
     """Settings over the rl-zoo3 entry, for both arms (documented deviations)."""
+    paths: tuple[int, ...] = ()
+    """Lengths of the event-free deterministic paths whose share of seeds the table counts (CliffWalking's rows)."""
     published: dict[str, str] = field(default_factory=dict)
     """rl-zoo3's published figure per stock algo (benchmark.md, one run: mean +- std of its episodes)."""
 
@@ -83,6 +85,7 @@ TASKS: dict[str, Task] = {
         variants={"sign": {"reward_split": "sign", "punishment_gamma": 0.99}},
         events="cliff_falls",
         overrides={"n_timesteps": 50_000},
+        paths=(13, 15, 17),
     ),
     "LavaGap": Task(
         env_id="LavaGapSplit-v0",
@@ -282,6 +285,30 @@ def _diff(a: Sequence[float], b: Sequence[float], digits: int = 1) -> str:
     return f"{d:+.{digits}f} [{d - h:+.{digits}f}, {d + h:+.{digits}f}]"
 
 
+MIN_SEEDS_FOR_VERDICT = 5
+
+
+def verdict(ret_2d: Sequence[float], ret_st: Sequence[float], ev_2d: Sequence[float], ev_st: Sequence[float]) -> str:
+    """The pre-registered rule (docs/benchmark.md): Welch intervals of 2D - stock on the final return and the events.
+
+    Events are left out where both are empty (a task without punishment events).
+    """
+    if min(len(ret_2d), len(ret_st)) < MIN_SEEDS_FOR_VERDICT:
+        return f"no verdict (< {MIN_SEEDS_FOR_VERDICT} seeds)"
+
+    def interval(a: Sequence[float], b: Sequence[float]) -> tuple[float, float]:
+        d, h = welch_ci(a, b)
+        return (d, d) if not math.isfinite(h) else (d - h, d + h)
+
+    ret_lo, ret_hi = interval(ret_2d, ret_st)
+    ev_lo, ev_hi = interval(ev_2d, ev_st) if ev_2d and all(map(math.isfinite, [*ev_2d, *ev_st])) else (0.0, 0.0)
+    helps = ret_lo > 0 or (ev_hi < 0 and not ret_hi < 0)
+    hurts = ret_hi < 0 or ev_lo > 0
+    if helps and hurts:
+        return "trade-off"
+    return "helps" if helps else "hurts" if hurts else "no difference shown"
+
+
 def table(task_name: str, rows: Sequence[Row]) -> str:
     """Markdown: per 2D-RL arm against its stock arm, final return and training punishment events, with 95% intervals.
 
@@ -292,8 +319,8 @@ def table(task_name: str, rows: Sequence[Row]) -> str:
     for row in rows:
         by_arm.setdefault(row["arm"], {})[row["seed"]] = row
     head = "| task | budget | stock arm | return | 2D-RL arm | return | 2D - stock [95% Welch] |"
-    head += " training events/episode, stock | 2D | 2D - stock | rl-zoo3 published (v2 where marked) |"
-    lines = [head, "|" + "---|" * 11]
+    head += " training events/episode, stock | 2D | 2D - stock | verdict | rl-zoo3 published (v2 where marked) |"
+    lines = [head, "|" + "---|" * 12]
     for arm in sorted(by_arm):
         algo, _ = split_arm(spec, arm)
         stock = STOCK.get(algo)
@@ -308,8 +335,24 @@ def table(task_name: str, rows: Sequence[Row]) -> str:
         budget = f"{base[0]['n_timesteps']:,}" if base else "-"
         lines.append(
             f"| {task_name} | {budget} | {stock} | {_cell(ret_st)} | {arm} | {_cell(ret_2d)} | {_diff(ret_2d, ret_st)} "
-            f"| {events} | {spec.published.get(stock, '-')} |"
+            f"| {events} | {verdict(ret_2d, ret_st, ev_2d if spec.events else [], ev_st)} "
+            f"| {spec.published.get(stock, '-')} |"
         )
+    if spec.paths:
+        lines += ["", path_table(spec, by_arm)]
+    return "\n".join(lines)
+
+
+def path_table(spec: Task, by_arm: dict[str, dict[int, Row]]) -> str:
+    """Per arm, the share of seeds whose final deterministic episodes take each path (event-free, that length)."""
+    names = [f"{n}-step path" for n in spec.paths]
+    lines = [f"| arm | {' | '.join(names)} | other (timeout, fall, mixed) |", "|" + "---|" * (len(names) + 2)]
+    for arm, seeds in sorted(by_arm.items()):
+        rows = list(seeds.values())
+        counts = [sum(r["final_length"] == n and r["final_events"] == 0 for r in rows) for n in spec.paths]
+        cells = [*counts, len(rows) - sum(counts)]
+        text = [f"{k}/{len(rows)} [{lo:.2f}, {hi:.2f}]" for k in cells for lo, hi in [wilson(k, len(rows))]]
+        lines.append(f"| {arm} | {' | '.join(text)} |")
     return "\n".join(lines)
 
 
