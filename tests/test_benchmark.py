@@ -5,7 +5,13 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -221,3 +227,25 @@ def test_verdict_follows_the_pre_registered_rule() -> None:
     assert verdict(base, base[::-1], base, base) == "no difference shown"
     assert verdict(up, base, [], []) == "helps"  # a task without events
     assert verdict(up[:4], base[:4], [], []).startswith("no verdict")
+
+
+@pytest.mark.slow
+def test_command_killed_for_real_resumes_to_the_rows_of_an_uninterrupted_run(tmp_path) -> None:
+    """SIGKILL the command (its own process group) after its first row; run it again; compare with a clean run."""
+    argv = ["--env", "CliffWalking", "--algos", "a2c", "twoda2c", "--seeds", "0", "1", "--n-timesteps", "800"]
+    argv += ["--episodes", "1", "--workers", "0", "--no-figure"]
+    clean = benchmark([*argv, "--out", str(tmp_path / "clean")])
+    store = tmp_path / "killed" / "CliffWalking" / "rows.json"
+    command = [sys.executable, "scripts/benchmark.py", *argv, "--out", str(tmp_path / "killed")]
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1]), "OMP_NUM_THREADS": "1"}
+    proc = subprocess.Popen(command, cwd=Path(__file__).resolve().parents[1], env=env, start_new_session=True)
+    try:
+        while proc.poll() is None and not (store.exists() and json.loads(store.read_text())):
+            time.sleep(0.2)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+    assert 1 <= len(json.loads(store.read_text())) < 4  # killed midway
+    resumed = benchmark([*argv, "--out", str(tmp_path / "killed")])
+    assert _same([{**r, "wall_s": 0} for r in resumed], [{**r, "wall_s": 0} for r in clean])
