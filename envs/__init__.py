@@ -13,7 +13,14 @@ Every ID has a ``vector_entry_point``, its batched env
 (``gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point")``): sub-env ``i`` behaves
 exactly like ``gym.make(id)`` (tested).
 
-All are truncated after 300 steps: the shortest the wall-avoiding random walks of property P5
+and, for the benchmark (``envs.public``, docs/benchmark.md), public tasks whose punishment is
+written into ``info["punishment"]`` (``reward_split="info"``):
+
+* ``LunarLanderSplit-v3``: LunarLander-v3, crash and fuel as punishment;
+* ``CliffWalkingSplit-v1``: CliffWalking-v1 with a 100-step limit, the cliff as punishment;
+* ``LavaGapSplit-v0``: MiniGrid-LavaGapS7-v0 with lava punished (needs ``minigrid``).
+
+The Nomad IDs are all truncated after 300 steps: the shortest the wall-avoiding random walks of property P5
 (docs/nomad.md) need to reach the default office's goal by the detour in at least a quarter of their
 successes (280), rounded up; 0.9**300 ~ 2e-14 makes the cut invisible to a gamma 0.9 learner.
 """
@@ -44,3 +51,10 @@ for suffix, kwargs in (("", {}), ("Open", {"map": "open"})):
         max_episode_steps=MAX_EPISODE_STEPS,
         kwargs=dict(kwargs),
     )
+
+for env_id, maker in (
+    ("LunarLanderSplit-v3", "make_lunar_lander"),
+    ("CliffWalkingSplit-v1", "make_cliff_walking"),
+    ("LavaGapSplit-v0", "make_lava_gap"),
+):
+    register(id=env_id, entry_point=f"envs.public:{maker}")
