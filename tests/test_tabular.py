@@ -63,23 +63,29 @@ def tables_without_biases(model: BaseAlgorithm) -> None:
             head.bias.requires_grad_(False)
 
 
+ONE_STEP_SGD = dict(
+    learning_rate=LEARNING_RATE,
+    n_steps=1,
+    gamma=GAMMA,
+    gae_lambda=0.0,
+    ent_coef=0.0,
+    vf_coef=VF_COEF,
+    max_grad_norm=math.inf,
+    normalize_advantage=False,
+    policy_kwargs=TABLE_POLICY,
+    device="cpu",
+)
+"""What both tabular actor-critics share: one-step TD, plain SGD, no clipping, bonus or normalisation."""
+
+
 def tabular_two_dim_a2c(env: DummyVecEnv, seed: int) -> VariantTwoDimA2C:
     """TwoDimA2C (its variant with eq. 9 and eq. 10 literally) configured as the paper's tabular 2D-RL
     (every setting: docs/tabular.md)."""
     model = VariantTwoDimA2C(
         "MlpPolicy",
         env,
-        learning_rate=LEARNING_RATE,
-        n_steps=1,
-        gamma=GAMMA,
-        gae_lambda=0.0,
-        ent_coef=0.0,
-        vf_coef=VF_COEF,
-        max_grad_norm=math.inf,
-        normalize_advantage=False,
-        policy_kwargs=TABLE_POLICY,
         seed=seed,
-        device="cpu",
+        **ONE_STEP_SGD,
         punishment_gamma=PUNISHMENT_GAMMA,
         punishment_gae_lambda=0.0,
         punishment_vf_coef=PUNISHMENT_VF_COEF,
@@ -98,21 +104,7 @@ def tabular_two_dim_a2c(env: DummyVecEnv, seed: int) -> VariantTwoDimA2C:
 
 def tabular_a2c(env: DummyVecEnv, seed: int) -> A2C:
     """Stock A2C configured as the tabular one-step actor-critic (docs/tabular.md)."""
-    model = A2C(
-        "MlpPolicy",
-        env,
-        learning_rate=LEARNING_RATE,
-        n_steps=1,
-        gamma=GAMMA,
-        gae_lambda=0.0,
-        ent_coef=0.0,
-        vf_coef=VF_COEF,
-        max_grad_norm=math.inf,
-        normalize_advantage=False,
-        policy_kwargs=TABLE_POLICY,
-        seed=seed,
-        device="cpu",
-    )
+    model = A2C("MlpPolicy", env, seed=seed, **ONE_STEP_SGD)
     tables_without_biases(model)
     return model
 
