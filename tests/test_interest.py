@@ -127,6 +127,7 @@ def collapsed_model(lead: float = 30.0, **kwargs: Any) -> TwoDimA2C:
     return model
 
 
+@pytest.mark.slow  # three learning runs, 25-30 s each
 @pytest.mark.parametrize(
     ("lead", "kwargs", "outcome"),
     [
