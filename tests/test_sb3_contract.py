@@ -180,3 +180,13 @@ def test_one_set_of_defaults() -> None:
     policy = inspect.signature(TwoDimPolicyMixin.__init__).parameters
     for name in TEMPERATURE_ARGUMENTS:
         assert policy[name].default == added[TwoDimA2C][name], name
+
+
+@pytest.mark.parametrize(("variant", "core"), [(VariantTwoDimA2C, TwoDimA2C), (VariantTwoDimPPO, TwoDimPPO)])
+def test_the_shipped_class_refuses_a_variants_file(tmp_path: Path, variant: type, core: type) -> None:
+    kwargs = dict(n_steps=16, batch_size=16) if variant is VariantTwoDimPPO else {}
+    model = variant("MlpPolicy", "CartPole-v1", seed=0, interest="paper", actor_update="tempered", **kwargs)
+    model.save(tmp_path / "v")
+    assert variant.load(tmp_path / "v").actor_update == "tempered"
+    with pytest.raises(ValueError, match=rf"ablation variant \(actor_update='tempered'\).*Variant{core.__name__}"):
+        core.load(tmp_path / "v")

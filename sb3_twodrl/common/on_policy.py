@@ -142,6 +142,12 @@ class TwoDimOnPolicyMixin:
                 "temperature settings moved into the policy and the punishment critic starts at 0; retrain, or "
                 "load it with the version that saved it"
             )
+        if "actor_update" in vars(self) and not hasattr(type(self), "actor_updates"):  # a variant's saved data
+            raise ValueError(
+                f"this file was saved by an ablation variant (actor_update={vars(self)['actor_update']!r}), whose "
+                f"training {type(self).__name__} would not reproduce: load it with "
+                f"sb3_twodrl.experiments.variants.Variant{type(self).__name__}"
+            )
         if self.rollout_buffer_class is None:
             is_dict = isinstance(self.observation_space, spaces.Dict)
             self.rollout_buffer_class = TwoDimDictRolloutBuffer if is_dict else TwoDimRolloutBuffer
