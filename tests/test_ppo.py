@@ -136,4 +136,4 @@ def test_actor_update_is_validated_and_saved(tmp_path) -> None:
         VariantTwoDimPPO("MlpPolicy", "CartPole-v1", actor_update="preference")
     model = VariantTwoDimPPO("MlpPolicy", "CartPole-v1", n_steps=16, batch_size=8, actor_update="compensated", seed=0)
     model.save(tmp_path / "m.zip")
-    assert TwoDimPPO.load(tmp_path / "m.zip").actor_update == "compensated"
+    assert VariantTwoDimPPO.load(tmp_path / "m.zip").actor_update == "compensated"
