@@ -26,6 +26,8 @@ from typing import Any
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
+from sb3_twodrl.common.infos import BatchInfos
+
 __all__ = [
     "EpisodeRecord",
     "EpisodeTracker",
@@ -107,6 +109,25 @@ class EpisodeTracker:
             self._collided[i] = None
             self._route_key[i] = False
 
+    def _track_columns(self, infos: Sequence[Mapping[str, Any]]) -> bool:
+        """The loop of :meth:`step` over a batched step's arrays; False where they cannot stand in for it."""
+        if not isinstance(infos, BatchInfos):
+            return False
+        present = [key for key in ("route", "collision") if key in infos.columns]
+        columns = {key: infos.column(key) for key in present}
+        if any(column is None for column in columns.values()):
+            return False
+        if (route := columns.get("route")) is not None:
+            self._route_key = [True] * self.n_envs
+            self._routes = [
+                old if new is None else str(new) for old, new in zip(self._routes, route.tolist(), strict=True)
+            ]
+        if (collision := columns.get("collision")) is not None:
+            self._collided = [
+                bool(old) or bool(new) for old, new in zip(self._collided, collision.tolist(), strict=True)
+            ]
+        return True
+
     def step(
         self,
         infos: Sequence[Mapping[str, Any]],
@@ -117,15 +138,17 @@ class EpisodeTracker:
         if rewards is not None:
             self._returns += np.asarray(rewards, dtype=np.float64).reshape(self.n_envs)
         self._lengths += 1
+        if not self._track_columns(infos):
+            routes, collided, route_key = self._routes, self._collided, self._route_key
+            for i, info in enumerate(infos):
+                if "route" in info:
+                    route_key[i] = True
+                    route = info["route"]
+                    if route is not None:
+                        routes[i] = str(route)
+                if "collision" in info:
+                    collided[i] = bool(collided[i]) or bool(info["collision"])
         routes, collided, route_key = self._routes, self._collided, self._route_key
-        for i, info in enumerate(infos):
-            if "route" in info:
-                route_key[i] = True
-                route = info["route"]
-                if route is not None:
-                    routes[i] = str(route)
-            if "collision" in info:
-                collided[i] = bool(collided[i]) or bool(info["collision"])
         finished: list[EpisodeRecord] = []
         for i in np.flatnonzero(dones):
             info = infos[i]

@@ -3,7 +3,10 @@
     python scripts/bench_algo.py --env CartPole-v1 --n-envs 8 --steps 40000
 
 Each pair trains on the same env id, n_envs, seed and stock arguments (the algorithms' defaults) in this
-process (DummyVecEnv, one torch thread). Throughput is env steps per second of this process's CPU
+process (DummyVecEnv, one torch thread). ``a2c``/``ppo`` pair the 2D-RL algorithm with stock SB3 (what
+a user sees); ``a2c-fast``/``ppo-fast`` with the experiments' stock arms, SB3's numbers on the same fast
+path as the 2D-RL algorithms (``sb3_twodrl.experiments.baselines``): the cost of the 2D parts alone.
+Throughput is env steps per second of this process's CPU
 time, so other load on a shared machine does not skew it; runs alternate (A2C, TwoDimA2C, PPO,
 TwoDimPPO, A2C, ...) and the median of the repeats is reported.
 """
@@ -19,9 +22,15 @@ from stable_baselines3.common.env_util import make_vec_env
 
 import envs  # noqa: F401  (registers the Nomad office ids)
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
+from sb3_twodrl.experiments.baselines import BatchedA2C, BatchedPPO
 
-PAIRS: dict[str, tuple[type[BaseAlgorithm], type[BaseAlgorithm]]] = {"a2c": (A2C, TwoDimA2C), "ppo": (PPO, TwoDimPPO)}
-TARGET = 0.85
+PAIRS: dict[str, tuple[type[BaseAlgorithm], type[BaseAlgorithm]]] = {
+    "a2c": (A2C, TwoDimA2C),
+    "ppo": (PPO, TwoDimPPO),
+    "a2c-fast": (BatchedA2C, TwoDimA2C),
+    "ppo-fast": (BatchedPPO, TwoDimPPO),
+}
+TARGET = 0.9
 
 
 def steps_per_second(algo: type[BaseAlgorithm], env_id: str, n_envs: int, steps: int, seed: int) -> float:
@@ -38,11 +47,11 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=40_000)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--pairs", nargs="+", choices=sorted(PAIRS), default=["a2c", "ppo"])
+    parser.add_argument("--pairs", nargs="+", choices=sorted(PAIRS), default=["a2c", "ppo", "a2c-fast", "ppo-fast"])
     args = parser.parse_args()
     th.set_num_threads(1)
 
-    algos = [algo for pair in args.pairs for algo in PAIRS[pair]]
+    algos = list(dict.fromkeys(algo for pair in args.pairs for algo in PAIRS[pair]))
     rates: dict[str, list[float]] = {algo.__name__: [] for algo in algos}
     for _ in range(args.repeats):
         for algo in algos:

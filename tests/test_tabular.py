@@ -150,8 +150,10 @@ class StepRecorder(BaseCallback):
 
 
 def drawn_two_dim(local: dict[str, Any], model: BaseAlgorithm) -> np.ndarray:
-    """The tempered distribution (eq. 9) TwoDimA2C drew the action from."""
-    return local["distribution"].distribution.probs[0].double().numpy()
+    """The tempered distribution (eq. 9) TwoDimA2C drew the action from (the parameters have not changed since)."""
+    with th.no_grad():
+        distribution = model.policy.tempered_distribution(local["latent_pi"], local["inverse_temperature"])
+    return distribution.distribution.probs[0].double().numpy()
 
 
 def drawn_a2c(local: dict[str, Any], model: BaseAlgorithm) -> np.ndarray:

@@ -13,13 +13,13 @@ import torch as th
 from gymnasium import spaces
 from stable_baselines3.common.buffers import RolloutBuffer
 from stable_baselines3.common.callbacks import BaseCallback
-from stable_baselines3.common.distributions import Distribution
 from stable_baselines3.common.logger import Logger
 from stable_baselines3.common.policies import BasePolicy
 from stable_baselines3.common.utils import obs_as_tensor
 from stable_baselines3.common.vec_env import VecEnv
 
 from sb3_twodrl.common.buffers import TwoDimBufferMixin, TwoDimDictRolloutBuffer, TwoDimRolloutBuffer
+from sb3_twodrl.common.infos import BatchInfosMixin
 from sb3_twodrl.common.policies import (
     TEMPERATURE_ARGUMENTS,
     TwoDimPolicyMixin,
@@ -39,7 +39,7 @@ SAVE_FORMAT = 2
 arguments and the ablation variants left the algorithms; files without it are refused by ``load``."""
 
 
-class TwoDimOnPolicyMixin:
+class TwoDimOnPolicyMixin(BatchInfosMixin):
     """
     2D-RL on an SB3 on-policy algorithm: two critics, the utility advantage and the interest temperature.
 
@@ -199,10 +199,10 @@ class TwoDimOnPolicyMixin:
             return np.zeros(self.n_envs, dtype=np.float32)
         return carried[1]
 
-    def _rollout_log_probs(self, latent_pi: th.Tensor, distribution: Distribution, actions: th.Tensor) -> th.Tensor:
-        """The ``old_log_prob`` stored with each action: its log-probability under the tempered
-        distribution that drew it (eq. 9), so that PPO's ratio is 1 at the first epoch."""
-        return distribution.log_prob(actions)
+    def _rollout_log_probs(self, latent_pi: th.Tensor, actions: th.Tensor, tempered: th.Tensor) -> th.Tensor:
+        """The ``old_log_prob`` stored with each action: its log-probability ``tempered`` under the
+        tempered distribution that drew it (eq. 9), so that PPO's ratio is 1 at the first epoch."""
+        return tempered
 
     def _evaluate_actions(
         self, observations: Any, actions: th.Tensor, inverse_temperatures: th.Tensor
@@ -245,9 +245,8 @@ class TwoDimOnPolicyMixin:
             if self.use_sde and self.sde_sample_freq > 0 and n_steps % self.sde_sample_freq == 0:
                 self.policy.reset_noise(env.num_envs)
             with th.no_grad():
-                distribution = self.policy.tempered_distribution(latent_pi, inverse_temperature)
-                actions = distribution.get_actions()
-                log_probs = self._rollout_log_probs(latent_pi, distribution, actions)
+                actions, log_probs = self.policy.sample_tempered(latent_pi, inverse_temperature)
+                log_probs = self._rollout_log_probs(latent_pi, actions, log_probs)
             actions = actions.cpu().numpy().reshape((-1, *self.action_space.shape))  # type: ignore[misc]
 
             clipped_actions = actions

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 import torch as th
 from stable_baselines3.common.distributions import (
+    CategoricalDistribution,
     DiagGaussianDistribution,
     Distribution,
     StateDependentNoiseDistribution,
@@ -27,6 +28,17 @@ from stable_baselines3.common.torch_layers import CombinedExtractor, NatureCNN
 from stable_baselines3.common.type_aliases import PyTorchObs
 from torch import nn
 
+from sb3_twodrl.common.fast import (
+    actor_latent,
+    build_optimizer,
+    categorical_entropy,
+    categorical_log_prob,
+    categorical_sample,
+    critic_latent,
+    latents,
+    linear,
+    normalized,
+)
 from sb3_twodrl.common.interest import relative_interest, updated_scale
 from sb3_twodrl.common.validation import is_real
 
@@ -134,25 +146,16 @@ class TwoDimPolicyMixin:
             with th.random.fork_rng(devices=[]):
                 self.interest_net = self._new_head()
         self.register_buffer("running_interest", th.zeros(()))  # type: ignore[attr-defined]
-        self.optimizer = self.optimizer_class(  # type: ignore[attr-defined]
-            self.parameters(),  # type: ignore[attr-defined]
-            lr=lr_schedule(1),
-            **self.optimizer_kwargs,  # type: ignore[attr-defined]
-        )
+        self.optimizer = build_optimizer(self, lr_schedule)  # type: ignore[arg-type]
 
     def evaluate_state(self, obs: PyTorchObs) -> tuple[th.Tensor, th.Tensor, th.Tensor, th.Tensor | None]:
         """Actor latent, ``V_R(s)``, ``V_P(s)`` and the interest head's ``I(s)`` (None without one) in one pass."""
-        features = self.extract_features(obs)  # type: ignore[attr-defined]
-        if self.share_features_extractor:
-            latent_pi, latent_vf = self.mlp_extractor(features)
-        else:
-            pi_features, vf_features = features
-            latent_pi = self.mlp_extractor.forward_actor(pi_features)
-            latent_vf = self.mlp_extractor.forward_critic(vf_features)
-        return latent_pi, self.value_net(latent_vf), self.punishment_value_net(latent_vf), self._predicted(latent_vf)
+        latent_pi, latent_vf = latents(self, obs)  # type: ignore[arg-type]
+        values, punishment_values = linear(self.value_net, latent_vf), linear(self.punishment_value_net, latent_vf)
+        return latent_pi, values, punishment_values, self._predicted(latent_vf)
 
     def _predicted(self, latent_vf: th.Tensor) -> th.Tensor | None:
-        return None if self.interest_net is None else self.interest_net(latent_vf.detach())
+        return None if self.interest_net is None else linear(self.interest_net, latent_vf.detach())
 
     def evaluate_actions_two_dim(
         self, obs: PyTorchObs, actions: th.Tensor, inverse_temperature: th.Tensor
@@ -166,16 +169,20 @@ class TwoDimPolicyMixin:
         (``1/T = 0``) scores 0: the preferences played no part in it.
         """
         latent_pi, values, punishment_values, predicted = self.evaluate_state(obs)
-        distribution = self.tempered_distribution(latent_pi, inverse_temperature, compensated=True)
-        log_prob, entropy = distribution.log_prob(actions), distribution.entropy()
+        if self._categorical():
+            log_probs = normalized(self._tempered_logits(latent_pi, inverse_temperature, compensated=True))
+            log_prob, entropy = categorical_log_prob(log_probs, actions), categorical_entropy(log_probs)
+        else:
+            distribution = self.tempered_distribution(latent_pi, inverse_temperature, compensated=True)
+            log_prob, entropy = distribution.log_prob(actions), distribution.entropy()
         drawn = (th.as_tensor(inverse_temperature, device=log_prob.device).reshape(-1) > 0).to(log_prob.dtype)
         return values, punishment_values, predicted, log_prob * drawn, None if entropy is None else entropy * drawn
 
     def predict_critics(self, obs: PyTorchObs) -> tuple[th.Tensor, th.Tensor]:
         """Reward critic ``V_R(s)`` and punishment critic ``V_P(s)`` (eq. 3, 4)."""
         features = BaseModel.extract_features(self, obs, self.vf_features_extractor)  # type: ignore[arg-type]
-        latent_vf = self.mlp_extractor.forward_critic(features)
-        return self.value_net(latent_vf), self.punishment_value_net(latent_vf)
+        latent_vf = critic_latent(self, features)  # type: ignore[arg-type]
+        return linear(self.value_net, latent_vf), linear(self.punishment_value_net, latent_vf)
 
     def predict_punishment_values(self, obs: PyTorchObs) -> th.Tensor:
         """Punishment critic ``V_P(s)`` (eq. 4)."""
@@ -206,18 +213,40 @@ class TwoDimPolicyMixin:
         (``d(p/T)/dp`` taken as 1), so any ``T * grad log pi_T`` is finite, also at ``1/T = 0``; a
         Gaussian's gradients hold no ``1/T`` (``T`` scales the std, whose log it shifts) and are unchanged.
         """
+        if not isinstance(self.action_dist, _GAUSSIANS):
+            logits = self._tempered_logits(latent_pi, inverse_temperature, compensated)
+            return self.action_dist.proba_distribution(action_logits=logits)  # type: ignore[call-arg]
         inverse = th.as_tensor(inverse_temperature, device=latent_pi.device).reshape(-1, 1)
-        mean_actions = self.action_net(latent_pi)
+        mean_actions = linear(self.action_net, latent_pi)
         if isinstance(self.action_dist, StateDependentNoiseDistribution):
             return self.action_dist.proba_distribution(mean_actions, self.log_std, latent_pi / inverse)
-        if isinstance(self.action_dist, DiagGaussianDistribution):
-            return self.action_dist.proba_distribution(mean_actions, self.log_std - th.log(inverse))
-        mean_actions = self._preferences(mean_actions)
+        return self.action_dist.proba_distribution(mean_actions, self.log_std - th.log(inverse))
+
+    def _tempered_logits(
+        self, latent_pi: th.Tensor, inverse_temperature: np.ndarray | th.Tensor, compensated: bool = False
+    ) -> th.Tensor:
+        """The preferences times ``1 / T`` (eq. 9) of a categorical policy (see :meth:`tempered_distribution`)."""
+        inverse = th.as_tensor(inverse_temperature, device=latent_pi.device).reshape(-1, 1)
+        preferences = self._preferences(linear(self.action_net, latent_pi))
         if compensated:
-            logits = mean_actions.detach() * inverse + (mean_actions - mean_actions.detach())
-        else:
-            logits = mean_actions * inverse
-        return self.action_dist.proba_distribution(action_logits=logits)  # type: ignore[call-arg]
+            return preferences.detach() * inverse + (preferences - preferences.detach())
+        return preferences * inverse
+
+    def sample_tempered(
+        self, latent_pi: th.Tensor, inverse_temperature: np.ndarray | th.Tensor
+    ) -> tuple[th.Tensor, th.Tensor]:
+        """Actions drawn from the tempered distribution (eq. 9) and their log-probabilities under it
+        (``tempered_distribution(...).get_actions()`` and ``log_prob``, the same numbers)."""
+        if self._categorical():
+            log_probs = normalized(self._tempered_logits(latent_pi, inverse_temperature))
+            actions = categorical_sample(log_probs)
+            return actions, categorical_log_prob(log_probs, actions)
+        distribution = self.tempered_distribution(latent_pi, inverse_temperature)
+        actions = distribution.get_actions()
+        return actions, distribution.log_prob(actions)
+
+    def _categorical(self) -> bool:
+        return isinstance(self.action_dist, CategoricalDistribution)
 
     def update_interest_scale(self, interest: np.ndarray, dones: np.ndarray) -> None:
         """Fold one vectorised step's interest into the running mean of ``delta+`` that scales ``I(s)``."""
@@ -228,27 +257,28 @@ class TwoDimPolicyMixin:
 
     def _actor_latent(self, obs: PyTorchObs) -> th.Tensor:
         features = BaseModel.extract_features(self, obs, self.pi_features_extractor)  # type: ignore[arg-type]
-        return self.mlp_extractor.forward_actor(features)
+        return actor_latent(self, features)  # type: ignore[arg-type]
 
-    def _running_distribution(self, obs: PyTorchObs, latent_pi: th.Tensor) -> Distribution:
+    def _running_inverse_temperature(self, obs: PyTorchObs, latent_pi: th.Tensor) -> np.ndarray:
         if self.interest_net is None:
             interest = np.full(len(latent_pi), self.running_interest.item(), dtype=np.float32)
         else:
             features = BaseModel.extract_features(self, obs, self.vf_features_extractor)  # type: ignore[arg-type]
-            predicted = self.interest_net(self.mlp_extractor.forward_critic(features))
+            predicted = linear(self.interest_net, critic_latent(self, features))  # type: ignore[arg-type]
             interest = predicted.detach().cpu().numpy().ravel()
-        return self.tempered_distribution(latent_pi, self.inverse_temperature(interest))
+        return self.inverse_temperature(interest)
 
     def get_distribution(self, obs: PyTorchObs) -> Distribution:
         """Tempered action distribution (eq. 9) at the interest head's ``I(s)`` (or the fixed temperature)."""
-        return self._running_distribution(obs, self._actor_latent(obs))
+        latent_pi = self._actor_latent(obs)
+        return self.tempered_distribution(latent_pi, self._running_inverse_temperature(obs, latent_pi))
 
     def _predict(self, observation: PyTorchObs, deterministic: bool = False) -> th.Tensor:
         """Sample from the tempered distribution, or take the argmax of the raw preferences if ``deterministic``."""
         latent_pi = self._actor_latent(observation)
         if deterministic:
             return self._get_action_dist_from_latent(latent_pi).get_actions(deterministic=True)  # type: ignore[attr-defined]
-        return self._running_distribution(observation, latent_pi).get_actions()
+        return self.sample_tempered(latent_pi, self._running_inverse_temperature(observation, latent_pi))[0]
 
 
 class TwoDimActorCriticPolicy(TwoDimPolicyMixin, ActorCriticPolicy):

@@ -250,11 +250,11 @@ class VariantTwoDimPPO(VariantMixin, TwoDimPPO):
     policy_aliases: ClassVar[dict[str, type[BasePolicy]]] = _VARIANT_POLICIES
     actor_updates: ClassVar[tuple[str, ...]] = ("log_prob", "tempered", "compensated", "compensated_skip_uniform")
 
-    def _rollout_log_probs(self, latent_pi: th.Tensor, distribution: Any, actions: th.Tensor) -> th.Tensor:
+    def _rollout_log_probs(self, latent_pi: th.Tensor, actions: th.Tensor, tempered: th.Tensor) -> th.Tensor:
         """``"log_prob"``: under the raw preferences (``T = 1``), the policy being optimised."""
         if self.actor_update == "log_prob":
             return self.policy._get_action_dist_from_latent(latent_pi).log_prob(actions)
-        return super()._rollout_log_probs(latent_pi, distribution, actions)
+        return super()._rollout_log_probs(latent_pi, actions, tempered)
 
     def _old_log_prob(self, rollout_data: Any) -> th.Tensor:
         if self.actor_update == "compensated_skip_uniform":

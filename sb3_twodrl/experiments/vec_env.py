@@ -21,6 +21,8 @@ from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvStepReturn
 
+from sb3_twodrl.common.infos import BatchInfos
+
 VEC_ENV_MODES = ("auto", "batched", "dummy")
 _FINAL_KEYS = ("final_obs", "final_info")
 
@@ -30,7 +32,8 @@ class VectorEnvAdapter(VecEnv):
 
     Each info key ``k`` (with its mask ``_k``) becomes ``infos[i][k]`` as a Python value (by
     ``tolist``) where the mask is set; at an episode end ``infos[i]`` gets SB3's
-    ``terminal_observation`` (from ``final_obs``) and ``TimeLimit.truncated``.
+    ``terminal_observation`` (from ``final_obs``) and ``TimeLimit.truncated``. ``infos`` is a
+    :class:`~sb3_twodrl.common.infos.BatchInfos`: the dicts are built when read, the arrays kept.
     """
 
     def __init__(self, venv: gym.vector.VectorEnv) -> None:
@@ -54,27 +57,15 @@ class VectorEnvAdapter(VecEnv):
         obs, rewards, terminated, truncated, info = self.venv.step(self._actions)
         dones = terminated | truncated
         infos = self._split_infos(info)
-        if dones.any():
-            final_obs = info["final_obs"]
-            for i in np.flatnonzero(dones):
-                infos[i]["terminal_observation"] = final_obs[i]
-                infos[i]["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
+        for i in np.flatnonzero(dones):
+            infos[i]["terminal_observation"] = info["final_obs"][i]
+            infos[i]["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
         return obs, rewards.astype(np.float32), dones, infos
 
-    def _split_infos(self, info: dict[str, Any]) -> list[dict[str, Any]]:
-        infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
-        for key, values in info.items():
-            if key.startswith("_") or key in _FINAL_KEYS:
-                continue
-            column = values.tolist() if isinstance(values, np.ndarray) else list(values)
-            mask = info.get(f"_{key}")
-            if mask is None or bool(np.all(mask)):
-                for env_info, value in zip(infos, column, strict=True):
-                    env_info[key] = value
-            else:
-                for i in np.flatnonzero(mask):
-                    infos[i][key] = column[i]
-        return infos
+    def _split_infos(self, info: dict[str, Any]) -> BatchInfos:
+        columns = {key: values for key, values in info.items() if not key.startswith("_") and key not in _FINAL_KEYS}
+        masks = {key: info[f"_{key}"] for key in columns if f"_{key}" in info}
+        return BatchInfos(self.num_envs, columns, masks)
 
     def close(self) -> None:
         self.venv.close()

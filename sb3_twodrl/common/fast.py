@@ -1,0 +1,146 @@
+"""SB3's actor-critic forward pass as plain tensor operations: the same operations, bit for bit, with
+less Python around them.
+
+At 64 envs a rollout step of a small MLP policy costs more in Python than in arithmetic: each
+``nn.Module`` call, each ``torch.distributions.Categorical`` (its argument checks, its lazy
+properties) costs as much as a layer's matmul. :func:`latents` runs SB3's ``MlpExtractor`` layer by
+layer with ``torch.nn.functional`` (any other extractor, or a module with hooks, through its own
+``forward``); :func:`categorical_sample`, :func:`categorical_log_prob` and :func:`categorical_entropy`
+are ``Categorical``'s own formulas. :class:`FastForwardMixin` gives an ``ActorCriticPolicy`` both,
+so that ``forward`` and ``evaluate_actions`` return exactly what SB3's do (tested bitwise).
+"""
+
+import inspect
+
+import torch as th
+from gymnasium import spaces
+from stable_baselines3.common.policies import ActorCriticPolicy
+from stable_baselines3.common.torch_layers import MlpExtractor
+from stable_baselines3.common.type_aliases import PyTorchObs, Schedule
+from torch import nn
+from torch.nn import functional as F
+
+_ACTIVATIONS = {nn.Tanh: th.tanh, nn.ReLU: F.relu, nn.Identity: lambda x: x}
+
+
+def _hooked(module: nn.Module) -> bool:
+    return bool(module._forward_hooks or module._forward_pre_hooks)
+
+
+def run_sequential(net: nn.Module, x: th.Tensor) -> th.Tensor:
+    """``net(x)`` for an ``nn.Sequential`` of ``nn.Linear`` and Tanh/ReLU layers, as ``torch.nn.functional``
+    calls; any other module (or one with hooks) is called as it is."""
+    if type(net) is not nn.Sequential or _hooked(net):
+        return net(x)
+    for layer in net:
+        if type(layer) is nn.Linear and not _hooked(layer):
+            x = F.linear(x, layer.weight, layer.bias)
+        elif type(layer) in _ACTIVATIONS and not _hooked(layer) and not getattr(layer, "inplace", False):
+            x = _ACTIVATIONS[type(layer)](x)
+        else:
+            x = layer(x)
+    return x
+
+
+def latents(policy: ActorCriticPolicy, obs: PyTorchObs) -> tuple[th.Tensor, th.Tensor]:
+    """The actor's and the critic's latent features of ``obs``, as ``ActorCriticPolicy.forward`` computes them."""
+    features = policy.extract_features(obs)
+    pi_features, vf_features = (features, features) if policy.share_features_extractor else features
+    extractor = policy.mlp_extractor
+    if type(extractor) is MlpExtractor and not _hooked(extractor):
+        return run_sequential(extractor.policy_net, pi_features), run_sequential(extractor.value_net, vf_features)
+    if policy.share_features_extractor:
+        return extractor(features)
+    return extractor.forward_actor(pi_features), extractor.forward_critic(vf_features)
+
+
+def critic_latent(policy: ActorCriticPolicy, vf_features: th.Tensor) -> th.Tensor:
+    """The critic's latent features, as ``mlp_extractor.forward_critic`` computes them."""
+    extractor = policy.mlp_extractor
+    if type(extractor) is MlpExtractor and not _hooked(extractor):
+        return run_sequential(extractor.value_net, vf_features)
+    return extractor.forward_critic(vf_features)
+
+
+def actor_latent(policy: ActorCriticPolicy, pi_features: th.Tensor) -> th.Tensor:
+    """The actor's latent features, as ``mlp_extractor.forward_actor`` computes them."""
+    extractor = policy.mlp_extractor
+    if type(extractor) is MlpExtractor and not _hooked(extractor):
+        return run_sequential(extractor.policy_net, pi_features)
+    return extractor.forward_actor(pi_features)
+
+
+def linear(layer: nn.Module, x: th.Tensor) -> th.Tensor:
+    """``layer(x)`` for an ``nn.Linear`` head, without the module call."""
+    if type(layer) is nn.Linear and not _hooked(layer):
+        return F.linear(x, layer.weight, layer.bias)
+    return layer(x)
+
+
+def normalized(logits: th.Tensor) -> th.Tensor:
+    """``Categorical(logits=...).logits``: log-probabilities."""
+    return logits - logits.logsumexp(dim=-1, keepdim=True)
+
+
+def categorical_sample(log_probs: th.Tensor) -> th.Tensor:
+    """``Categorical.sample()`` from normalized logits: one action per row, the same random draws."""
+    return th.multinomial(F.softmax(log_probs, dim=-1), 1, True).T.reshape(-1)
+
+
+def categorical_log_prob(log_probs: th.Tensor, actions: th.Tensor) -> th.Tensor:
+    """``Categorical.log_prob(actions)`` from normalized logits."""
+    return log_probs.gather(-1, actions.long().unsqueeze(-1)).squeeze(-1)
+
+
+def categorical_entropy(log_probs: th.Tensor) -> th.Tensor:
+    """``Categorical.entropy()`` from normalized logits."""
+    clamped = th.clamp(log_probs, min=th.finfo(log_probs.dtype).min)
+    return -(clamped * F.softmax(log_probs, dim=-1)).sum(-1)
+
+
+def build_optimizer(policy: ActorCriticPolicy, lr_schedule: Schedule) -> th.optim.Optimizer:
+    """The policy's optimizer over all its parameters, multi-tensor (``foreach=True``) where the optimizer
+    class takes it and ``optimizer_kwargs`` does not say otherwise: one kernel per operation for all
+    the parameters instead of one per parameter, the same numbers (PyTorch's RMSprop and Adam, tested)."""
+    kwargs = dict(policy.optimizer_kwargs)
+    if "foreach" in inspect.signature(policy.optimizer_class).parameters:
+        kwargs.setdefault("foreach", True)
+    return policy.optimizer_class(policy.parameters(), lr=lr_schedule(1), **kwargs)
+
+
+class FastForwardMixin:
+    """``forward`` and ``evaluate_actions`` of an ``ActorCriticPolicy`` by :func:`latents` and, for
+    ``Discrete`` actions, the categorical formulas above: SB3's results, bit for bit."""
+
+    action_space: spaces.Space
+    action_net: nn.Module
+    value_net: nn.Module
+
+    def _categorical(self) -> bool:
+        return isinstance(self.action_space, spaces.Discrete)
+
+    def forward(self, obs: th.Tensor, deterministic: bool = False) -> tuple[th.Tensor, th.Tensor, th.Tensor]:
+        if not self._categorical():
+            return super().forward(obs, deterministic)  # type: ignore[misc]
+        latent_pi, latent_vf = latents(self, obs)  # type: ignore[arg-type]
+        values = linear(self.value_net, latent_vf)
+        log_probs = normalized(linear(self.action_net, latent_pi))
+        actions = th.argmax(F.softmax(log_probs, dim=-1), dim=1) if deterministic else categorical_sample(log_probs)
+        return actions, values, categorical_log_prob(log_probs, actions)
+
+    def evaluate_actions(self, obs: PyTorchObs, actions: th.Tensor) -> tuple[th.Tensor, th.Tensor, th.Tensor | None]:
+        if not self._categorical():
+            return super().evaluate_actions(obs, actions)  # type: ignore[misc]
+        latent_pi, latent_vf = latents(self, obs)  # type: ignore[arg-type]
+        log_probs = normalized(linear(self.action_net, latent_pi))
+        values = linear(self.value_net, latent_vf)
+        return values, categorical_log_prob(log_probs, actions), categorical_entropy(log_probs)
+
+
+class FastActorCriticPolicy(FastForwardMixin, ActorCriticPolicy):
+    """SB3's ``ActorCriticPolicy`` (the ``MlpPolicy`` of A2C and PPO) with :class:`FastForwardMixin` and
+    a multi-tensor optimizer (:func:`build_optimizer`)."""
+
+    def _build(self, lr_schedule: Schedule) -> None:
+        super()._build(lr_schedule)
+        self.optimizer = build_optimizer(self, lr_schedule)
