@@ -6,8 +6,9 @@ Importing this package registers:
 * ``NomadOfficeReal-v0``: the same office on a stand-in for the physical robot (``envs.nomad.realistic``:
   specular sonar, ringing, cross-talk, surface-dependent infrared, drifting odometry);
 * ``NomadOfficeMemorable-v0``: the same task replayed from a recorded sensor database (MEMORABLE);
-* ``NomadOfficeOpen-v0`` / ``NomadOfficeRealOpen-v0`` / ``NomadOfficeMemorableOpen-v0``: the three on the issue-4 office
-  (``map="open"``, which any of the IDs also takes), kept so results can be shown on both maps.
+* ``NomadOfficeOpen-v0`` / ``NomadOfficeRealOpen-v0`` / ``NomadOfficeMemorableOpen-v0``: the three on the open
+  office (start, gap and goal in one line: no dilemma; ``map="open"``, which any of the IDs also
+  takes), kept so results can be shown on both maps.
 
 Every ID has a ``vector_entry_point``, its batched env
 (``gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point")``): sub-env ``i`` behaves

@@ -1,4 +1,4 @@
-"""What each part of 2D-RL contributes on the paper's task (issue 11): see :mod:`sb3_twodrl.experiments.ablation`.
+"""What each part of 2D-RL contributes on the paper's task: see :mod:`sb3_twodrl.experiments.ablation`.
 
 python scripts/ablation.py --out runs/ablation                      # 5 arms x 10 seeds, 50 paper epochs
 python scripts/ablation.py --out runs/ablation_open --env NomadOfficeOpen-v0

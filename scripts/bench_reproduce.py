@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Throughput of the paper's protocol, both arms measured side by side in one run (issue 13 targets).
+"""Throughput of the paper's protocol, both arms measured side by side in one run (targets: docs/benchmarks.md).
 
 For each n_envs: one (algo, seed) run per arm of ``--epochs`` paper-sized epochs (K learning
 trials, then M test trials, batched pipeline, exactly as ``reproduce.py`` runs them; no

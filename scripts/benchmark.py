@@ -1,4 +1,4 @@
-"""Benchmark on public tasks (issue 25): :mod:`sb3_twodrl.experiments.benchmark` (``sb3-twodrl-benchmark``)."""
+"""Benchmark on public tasks: :mod:`sb3_twodrl.experiments.benchmark` (``sb3-twodrl-benchmark``)."""
 
 from sb3_twodrl.experiments.benchmark import main
 

@@ -1,4 +1,4 @@
-"""Measure the office's dilemma (issue 15, properties P1-P5) exactly, before any learning, on one or more maps.
+"""Measure the office's dilemma (properties P1-P5, docs/nomad.md) exactly, before any learning, on one or more maps.
 
 Prints, side by side for each map, the figures of :func:`envs.nomad.dilemma.measure` (exact
 expectations on the lattice, no sampling) and whether properties P1-P5 hold; ``--limits`` adds the

@@ -1,4 +1,4 @@
-"""The ablation (issue 11): arms differ only in their 2D settings, the fixed arms take the paper arm's temperature."""
+"""The ablation: arms differ only in their 2D settings, the fixed arms take the paper arm's temperature."""
 
 from __future__ import annotations
 

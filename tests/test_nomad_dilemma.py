@@ -1,4 +1,4 @@
-"""The default office poses the paper's dilemma, properties P1-P5 of issue 15, before any learning.
+"""The default office poses the paper's dilemma (properties P1-P5, docs/nomad.md) before any learning.
 
 The figures are exact (``envs.nomad.dilemma``); one test checks them against walks of the batched env.
 """

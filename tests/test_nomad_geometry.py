@@ -1,4 +1,4 @@
-"""Geometry and sensors against hand-computed values (issue 4); map-file validation."""
+"""Geometry and sensors against hand-computed values; map-file validation."""
 
 import json
 import math

@@ -41,7 +41,7 @@ def default_database_path(map: str | Path | None = None) -> Path:
     """The database shipped for a shipped map (realistic sensor model, K = 8); others get the office's.
 
     ``map`` as :func:`envs.nomad.geometry.map_source` takes it: ``None``/``"office"`` is the default
-    office (``office_k8.npz``), ``"open"`` the issue-4 office (``open_k8.npz``).
+    office (``office_k8.npz``), ``"open"`` the open office (``open_k8.npz``).
     """
     name = "open" if map_source(map) == map_source("open") else "office"
     return Path(__file__).with_name("data") / f"{name}_k8.npz"

@@ -1,4 +1,4 @@
-"""Recording a sensor database as a real robot would: driving by dead reckoning (issue 12).
+"""Recording a sensor database as a real robot would: driving by dead reckoning.
 
 A real robot does not know where it is: it labels each recording with its odometry. The
 recorder below drives the stand-in robot of :mod:`envs.nomad.realistic` from the map's start to

@@ -1,4 +1,4 @@
-"""The office's dilemma (paper section 3.3), measured exactly on the lattice before any learning (issue 15).
+"""The office's dilemma (paper section 3.3), measured exactly on the lattice before any learning.
 
 Every figure here is an exact expectation over ``NomadOffice-v0``'s lattice semantics (eq. 11-12
 evaluations, termination on collision or goal, truncation after ``time_limit`` steps), computed by
@@ -165,7 +165,7 @@ def mean_episode_length(core: OfficeCore, policy: np.ndarray, time_limit: int) -
 
 
 def measure(core: OfficeCore, time_limit: int, eps_grid: np.ndarray | None = None) -> dict[str, float]:
-    """The figures of properties P1-P5 (issue 15) for one office, episodes truncated after ``time_limit`` steps."""
+    """The figures of properties P1-P5 (docs/nomad.md) for one office, episodes truncated after ``time_limit`` steps."""
     if isinstance(time_limit, bool) or not isinstance(time_limit, int) or time_limit < 1:
         raise ValueError(f"time_limit must be a positive int, got {time_limit!r}")
     eps_grid = np.round(np.arange(0.0, 0.51, 0.01), 2) if eps_grid is None else eps_grid
@@ -202,7 +202,7 @@ def measure(core: OfficeCore, time_limit: int, eps_grid: np.ndarray | None = Non
 
 
 def properties(m: dict[str, float]) -> dict[str, bool]:
-    """Pass/fail of the pre-registered properties P1-P5 (issue 15) on the figures of :func:`measure`."""
+    """Pass/fail of the pre-registered properties P1-P5 (docs/nomad.md) on the figures of :func:`measure`."""
     return {
         "P1": m["shortcut_return_eps0.05"] > m["detour_return_eps0.05"]
         and m["detour_goal_rate_eps0.3"] >= 1.3 * m["shortcut_goal_rate_eps0.3"]

@@ -1,4 +1,4 @@
-"""The gap between the ideal simulator and the stand-in robot, measured before any learning (issue 12)."""
+"""The gap between the ideal simulator and the stand-in robot, measured before any learning."""
 
 from __future__ import annotations
 

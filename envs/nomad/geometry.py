@@ -46,7 +46,7 @@ def _in_rect(rect: tuple[float, float, float, float], xy: np.ndarray) -> np.ndar
 
 
 MAPS_DIR = Path(__file__).with_name("maps")
-SHIPPED_MAPS = ("office", "open")  # map="office" (the default, issue 15) or map="open" (the issue-4 office)
+SHIPPED_MAPS = ("office", "open")  # map="office" (the default) or map="open" (no dilemma)
 
 
 def default_map_path() -> Path:

@@ -170,7 +170,7 @@ class NomadOfficeEnv(gym.Env):
     leaves the lattice and readings are ray cast at the true pose; odometry reports the
     dead-reckoned (commanded) position, as wheel odometry does.
 
-    Sensor-source seam (MEMORABLE, issue 5): on the lattice, readings come only from
+    Sensor-source seam (MEMORABLE): on the lattice, readings come only from
     :meth:`_lattice_readings` and move outcomes only from ``self._moves`` (``(n_cells, 4)``, next
     cell or -1 for a collision). A replay subclass overrides the method to return one of K
     recorded readings of the cell and swaps ``self._moves`` for the recorded free space.

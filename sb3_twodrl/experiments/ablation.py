@@ -1,4 +1,4 @@
-"""What each part of 2D-RL contributes (issue 11), at the paper's protocol: ``sb3-twodrl-ablation``.
+"""What each part of 2D-RL contributes, at the paper's protocol: ``sb3-twodrl-ablation``.
 
 Every arm is a grid of (arm, seed) runs of :func:`~sb3_twodrl.experiments.runner.run_pair`
 (epochs of K learning trials and M test trials, batched envs, resume), in ``<out>/<arm>/``. All arms
@@ -119,7 +119,7 @@ ARMS: dict[str, tuple[str, dict[str, Any]]] = {
 FIXED = ("a2c_fixed", "twod_fixed", "twod_fixed_compensated", "twoda2c_fixed")
 """Arms acting at a fixed temperature (that of the ``paper`` arm), raw preferences."""
 DEFAULT_ARMS = ("a2c", "a2c_fixed", "twod_fixed", "paper", "learned_skip_uniform")
-"""Issue 11's five arms: A2C, A2C and TwoDimA2C at the paper arm's mean temperature, eq. 9 as the paper
+"""The ablation's five arms: A2C, A2C and TwoDimA2C at the paper arm's mean temperature, eq. 9 as the paper
 writes it, and TwoDimA2C's default of its time (``interest="learned"``, pinned so that the arm keeps its rows)."""
 METRICS = (
     "learned",

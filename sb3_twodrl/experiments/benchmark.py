@@ -1,4 +1,4 @@
-"""Benchmark on public tasks (issue 25): ``sb3-twodrl-benchmark --env TASK --algos ARM ...``.
+"""Benchmark on public tasks: ``sb3-twodrl-benchmark --env TASK --algos ARM ...``.
 
 Each (arm, seed) trains with rl-zoo3 itself (``rl_zoo3.train``) at the task's rl-zoo3 entry, the
 same for a stock arm (``a2c``, ``ppo``) and its 2D-RL arm (``twoda2c``, ``twodppo``), which adds

@@ -1,4 +1,4 @@
-"""Non-regression against stock SB3 on classic tasks (issue 11): ``sb3-twodrl-non-regression``.
+"""Non-regression against stock SB3 on classic tasks: ``sb3-twodrl-non-regression``.
 
 Each (algo, seed) trains with rl-zoo3 itself (``rl_zoo3.train``, the packaged hyperparameter files of
 :mod:`sb3_twodrl.hyperparams` or those of ``--hyperparams-dir``, i.e. rl-zoo3's own entries for stock
