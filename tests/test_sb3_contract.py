@@ -112,7 +112,9 @@ IDENTITY_ENVS = [
         marks=[
             pytest.mark.slow,
             pytest.mark.xfail(
-                reason="81.3 at seed 3 (A2C 93.2): the learned temperature, mean T 0.9, explores less at this budget",
+                reason="81.3 at seed 3 (A2C 93.2; seeds 0-19: 76.9 vs 89.4): eq. 9 sharpens the states where the "
+                "exact pair of 16 is not found yet (rare reward, small E[delta+|s], T at the 0.5 floor) and heats "
+                "those being learned; so does IdentityEnv(16): the method, not MultiDiscrete",
                 strict=False,
             ),
         ],
