@@ -35,7 +35,7 @@ import numpy as np
 
 from sb3_twodrl.experiments.checkpoint import atomic_write_bytes
 from sb3_twodrl.experiments.intervals import mean_ci, welch_ci, wilson
-from sb3_twodrl.experiments.non_regression import EVAL_SEED, check_settings
+from sb3_twodrl.experiments.non_regression import EVAL_SEED, open_record
 
 Row = dict[str, Any]
 STOCK = {"twoda2c": "a2c", "twodppo": "ppo"}
@@ -442,10 +442,7 @@ def benchmark(argv: list[str] | None = None) -> list[Row]:
     """Run (or resume) the arms' seeds of a task; write rows (JSON, CSV), the table and the figure; the rows."""
     args = parse_args(argv)
     out = args.out / args.env
-    out.mkdir(parents=True, exist_ok=True)
-    check_settings(out, settings(args))
-    store = out / "rows.json"
-    done: dict[str, Row] = json.loads(store.read_text()) if store.exists() else {}
+    store, done = open_record(out, settings(args), "rows.json")
     todo = [(a, s) for s in args.seeds for a in args.algos if f"{a}_seed{s}" not in done]
     runs = str(out / "runs")
     for arm, seed, row in _run(todo, args.env, runs, args.episodes, args.n_timesteps, args.workers):

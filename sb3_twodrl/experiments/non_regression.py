@@ -18,6 +18,7 @@ import json
 import multiprocessing as mp
 import os
 from pathlib import Path
+from typing import Any
 
 from sb3_twodrl.experiments.intervals import mean_ci, welch_ci
 from sb3_twodrl.hyperparams import hyperparams_path, read_entry
@@ -132,15 +133,21 @@ def check_settings(out: Path, current: dict[str, str]) -> None:
     path.write_text(json.dumps({**old, **current}, indent=1, sort_keys=True))
 
 
+def open_record(out: Path, current: dict[str, str], name: str) -> tuple[Path, dict[str, Any]]:
+    """Make ``out``, check its settings (:func:`check_settings`) and read the kept record ``out / name``
+    (``"<algo>_seed<seed>"`` -> result; empty if none): its path and its entries."""
+    out.mkdir(parents=True, exist_ok=True)
+    check_settings(out, current)
+    store = out / name
+    return store, json.loads(store.read_text()) if store.exists() else {}
+
+
 def non_regression(argv: list[str] | None = None) -> dict[str, list[float]]:
     """Run (or resume: finished (algo, seed) results are kept in ``<out>/<env>/returns.json``, with the
     settings they were made with in ``settings.json``) and print the table."""
     args = parse_args(argv)
     out = args.out / args.env
-    out.mkdir(parents=True, exist_ok=True)
-    check_settings(out, settings(args))
-    store = out / "returns.json"
-    done: dict[str, float] = json.loads(store.read_text()) if store.exists() else {}
+    store, done = open_record(out, settings(args), "returns.json")
     todo = [(a, s) for a in args.algos for s in args.seeds if f"{a}_seed{s}" not in done]
     with cf.ProcessPoolExecutor(max_workers=args.workers, mp_context=mp.get_context("spawn")) as pool:
         shared = (str(out), args.hyperparams_dir, args.episodes, args.n_timesteps)
