@@ -29,8 +29,8 @@ def _assert_same_parameters(expected: th.nn.Module, actual: th.nn.Module) -> Non
     ],
 )
 def test_fast_stock_algorithm_learns_sb3s_parameters_bitwise(stock, fast, env_id, kwargs) -> None:
-    expected = stock("MlpPolicy", env_id, seed=4, device="cpu", **kwargs).learn(640)
-    actual = fast("MlpPolicy", env_id, seed=4, device="cpu", **kwargs).learn(640)
+    expected = stock("MlpPolicy", env_id, seed=4, device="cpu", **kwargs).learn(400)
+    actual = fast("MlpPolicy", env_id, seed=4, device="cpu", **kwargs).learn(400)
     _assert_same_parameters(expected.policy, actual.policy)
     obs = np.stack([actual.env.observation_space.sample() for _ in range(7)])
     assert np.array_equal(expected.predict(obs, deterministic=True)[0], actual.predict(obs, deterministic=True)[0])

@@ -14,6 +14,7 @@ from sb3_twodrl import TwoDimA2C
 from sb3_twodrl.experiments.non_regression import check_settings, non_regression, parse_args, settings
 
 
+@pytest.mark.slow  # spawns rl-zoo3 training processes (about 40 s); CI's wheel check runs the command
 def test_tiny_pendulum_check_evaluates_every_seed_and_resumes(tmp_path) -> None:
     argv = ["--env", "Pendulum-v1", "--seeds", "0", "1", "--n-timesteps", "128", "--episodes", "1"]
     argv += ["--out", str(tmp_path), "--workers", "2", "--set", "min_temperature:1.0"]

@@ -98,6 +98,7 @@ def test_resume_accepts_an_added_algo(tmp_path, toy_hp):
     assert sorted(json.loads((tmp_path / "config.json").read_text())["hyperparams"]) == sorted(ALGOS)
 
 
+@pytest.mark.slow  # starts a Ray cluster of worker processes (about 30 s)
 def test_ray_backend_gives_the_process_rows(process_run, toy_hp, tmp_path):
     pytest.importorskip("ray")
     # Ray >= 2.x dropped local_mode; a local single-node Ray instance (one CPU) runs the same tasks instead.
