@@ -42,12 +42,17 @@ def run_sequential(net: nn.Module, x: th.Tensor) -> th.Tensor:
     return x
 
 
+def _plain_extractor(policy: ActorCriticPolicy) -> bool:
+    """Whether the extractor is SB3's own ``MlpExtractor`` without hooks, which :func:`run_sequential` may run."""
+    return type(policy.mlp_extractor) is MlpExtractor and not _hooked(policy.mlp_extractor)
+
+
 def latents(policy: ActorCriticPolicy, obs: PyTorchObs) -> tuple[th.Tensor, th.Tensor]:
     """The actor's and the critic's latent features of ``obs``, as ``ActorCriticPolicy.forward`` computes them."""
     features = policy.extract_features(obs)
     pi_features, vf_features = (features, features) if policy.share_features_extractor else features
     extractor = policy.mlp_extractor
-    if type(extractor) is MlpExtractor and not _hooked(extractor):
+    if _plain_extractor(policy):
         return run_sequential(extractor.policy_net, pi_features), run_sequential(extractor.value_net, vf_features)
     if policy.share_features_extractor:
         return extractor(features)
@@ -57,7 +62,7 @@ def latents(policy: ActorCriticPolicy, obs: PyTorchObs) -> tuple[th.Tensor, th.T
 def critic_latent(policy: ActorCriticPolicy, vf_features: th.Tensor) -> th.Tensor:
     """The critic's latent features, as ``mlp_extractor.forward_critic`` computes them."""
     extractor = policy.mlp_extractor
-    if type(extractor) is MlpExtractor and not _hooked(extractor):
+    if _plain_extractor(policy):
         return run_sequential(extractor.value_net, vf_features)
     return extractor.forward_critic(vf_features)
 
@@ -65,7 +70,7 @@ def critic_latent(policy: ActorCriticPolicy, vf_features: th.Tensor) -> th.Tenso
 def actor_latent(policy: ActorCriticPolicy, pi_features: th.Tensor) -> th.Tensor:
     """The actor's latent features, as ``mlp_extractor.forward_actor`` computes them."""
     extractor = policy.mlp_extractor
-    if type(extractor) is MlpExtractor and not _hooked(extractor):
+    if _plain_extractor(policy):
         return run_sequential(extractor.policy_net, pi_features)
     return extractor.forward_actor(pi_features)
 
