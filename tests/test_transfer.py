@@ -32,6 +32,12 @@ def test_sensors_only_transfer_counts_every_trial(tmp_path) -> None:
     assert "| a2c | NomadOffice-v0 |" in table([row])
 
 
+def test_seed_list_overrides_the_seed_count() -> None:
+    argv = ["--timesteps", "100", "--seeds", "3", "--seed-list", "7", "--trials", "10", "--n-envs", "2"]
+    (row,) = transfer(parse_args([*argv, "--algos", "a2c", "--train-envs", "NomadOffice-v0"]))
+    assert row.seeds == [7] and len(row.successes) == 1
+
+
 def test_sensors_only_envs_drop_the_odometry() -> None:
     full = gym.make("NomadOfficeReal-v0").observation_space.shape[0]
     sensors = gym.make("NomadOfficeReal-v0", observe_odometry=False).observation_space.shape[0]

@@ -105,6 +105,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--quick", action="store_true", help="3 seeds, 150k steps, 50 trials (< 10 min, 2 cores)")
     p.add_argument("--timesteps", type=int, default=300_000, help="training steps per run")
     p.add_argument("--seeds", type=int, default=5, help="training seeds 0..S-1")
+    p.add_argument("--seed-list", type=int, nargs="+", help="explicit training seeds (overrides --seeds)")
     p.add_argument("--trials", type=int, default=60, help="target-env trials per policy (the first 10: the paper's)")
     p.add_argument("--eval-seed", type=int, default=1_000_003, help="held-out seed of the target env's trials")
     p.add_argument("--algos", nargs="+", default=["twoda2c", "a2c"], choices=sorted(ALGOS))
@@ -131,7 +132,8 @@ def transfer(args: argparse.Namespace) -> list[TransferRow]:
     for package in args.gym_packages:
         importlib.import_module(package)
     th.set_num_threads(1)
-    seeds, rows, start, kwargs = list(range(args.seeds)), [], time.time(), args.env_kwargs
+    seeds = args.seed_list if args.seed_list else list(range(args.seeds))
+    rows, start, kwargs = [], time.time(), args.env_kwargs
     for algo in args.algos:
         for env_id in args.train_envs:
             row = TransferRow(algo, env_id, seeds, args.trials, kwargs)
