@@ -72,3 +72,12 @@ def test_the_rules_turn_on_where_the_paper_result_is_and_off_where_it_is_not(tmp
 def test_no_rows_is_an_error(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="runs"):
         factorial.read_cells(tmp_path)
+
+
+def test_figures_draw_each_cell_with_every_arm(tmp_path: Path) -> None:
+    pytest.importorskip("matplotlib")
+    write_arm(tmp_path / "runs" / "cell" / "a2c", [rows(s, [0.5]) for s in range(2)])
+    write_arm(tmp_path / "runs" / "cell" / "twoda2c", [rows(0, [0.0], algo="twoda2c")])
+    factorial.main(["--runs", str(tmp_path / "runs"), "--out", str(tmp_path / "out"), "--figures"])
+    names = sorted(p.name for p in (tmp_path / "out" / "cell").iterdir())
+    assert names == ["fig3_goal_rate.png", "fig4_reward_per_step.png", "fig5_route_share.png"]

@@ -6,7 +6,7 @@ reads their rows and applies the registered metrics and rules; it runs nothing. 
 1-150), the final detour and shortcut shares, reward per step and collision rate (last 10% of the
 epochs), and the interest share. Per cell and arm: means with 95% intervals over seeds (Wilson for
 the share that learned). Per cell: each 2D arm minus ``a2c`` with a Welch interval, and the rules'
-verdicts.
+verdicts. With ``--figures``, the paper's figures 3-5 per cell (extra ``plots``).
 """
 
 from __future__ import annotations
@@ -128,10 +128,28 @@ def verdicts(cells: dict[str, dict[str, list[dict[str, float]]]], baseline: str 
     return "\n".join(lines)
 
 
+def figures(runs: Path, out: Path) -> list[Path]:
+    """The paper's figures 3-5 of each cell, every arm's seeds (:func:`~sb3_twodrl.experiments.plots.make_figures`):
+    ``<out>/<cell>/fig*.png``."""
+    import pandas as pd
+
+    from sb3_twodrl.experiments.plots import make_figures
+
+    paths = []
+    for cell in sorted(p for p in runs.iterdir() if p.is_dir()):
+        frames = [collect_results(arm) for arm in sorted(cell.iterdir()) if (arm / "pairs").is_dir()]
+        if frames:
+            df = pd.concat(frames, ignore_index=True)
+            seeds = ", ".join(f"{algo} {g['seed'].nunique()}" for algo, g in df.groupby("algo"))
+            paths += make_figures(df, out / cell.name, title=f"factorial cell {cell.name} (seeds: {seeds})")
+    return paths
+
+
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--runs", type=Path, default=Path("runs") / "factorial", help="folder of the cell folders")
     p.add_argument("--out", type=Path, help="also write table.md and runs.json here")
+    p.add_argument("--figures", action="store_true", help="with --out: also the figures 3-5 of each cell")
     return p.parse_args(argv)
 
 
@@ -143,4 +161,6 @@ def main(argv: list[str] | None = None) -> None:
         args.out.mkdir(parents=True, exist_ok=True)
         (args.out / "table.md").write_text(text)
         (args.out / "runs.json").write_text(json.dumps(cells, indent=1))
+        if args.figures:
+            figures(args.runs, args.out)
     print(text)
