@@ -64,16 +64,25 @@ def run_metrics(rows: Any) -> dict[str, float]:
     }
 
 
-def read_cells(runs: Path) -> dict[str, dict[str, list[dict[str, float]]]]:
-    """Per cell folder of ``runs``, per arm folder with rows, the :func:`run_metrics` of each seed."""
-    cells: dict[str, dict[str, list[dict[str, float]]]] = {}
+def cell_rows(runs: Path) -> dict[str, dict[str, Any]]:
+    """Per cell folder of ``runs``, per arm folder with rows, its rows (:func:`collect_results`)."""
+    cells = {}
     for cell in sorted(p for p in runs.iterdir() if p.is_dir()):
-        arms = {}
-        for arm in sorted(p for p in cell.iterdir() if (p / "pairs").is_dir()):
-            df = collect_results(arm)
-            arms[arm.name] = [{"seed": int(seed), **run_metrics(rows)} for seed, rows in df.groupby("seed")]
+        arms = {arm.name: collect_results(arm) for arm in sorted(cell.iterdir()) if (arm / "pairs").is_dir()}
         if arms:
             cells[cell.name] = arms
+    return cells
+
+
+def read_cells(runs: Path) -> dict[str, dict[str, list[dict[str, float]]]]:
+    """Per cell, per arm (:func:`cell_rows`), the :func:`run_metrics` of each seed."""
+    cells = {
+        cell: {
+            arm: [{"seed": int(seed), **run_metrics(rows)} for seed, rows in df.groupby("seed")]
+            for arm, df in arms.items()
+        }
+        for cell, arms in cell_rows(runs).items()
+    }
     if not cells:
         raise ValueError(f"runs: no cell with rows under {runs}")
     return cells
@@ -136,12 +145,10 @@ def figures(runs: Path, out: Path) -> list[Path]:
     from sb3_twodrl.experiments.plots import make_figures
 
     paths = []
-    for cell in sorted(p for p in runs.iterdir() if p.is_dir()):
-        frames = [collect_results(arm) for arm in sorted(cell.iterdir()) if (arm / "pairs").is_dir()]
-        if frames:
-            df = pd.concat(frames, ignore_index=True)
-            seeds = ", ".join(f"{algo} {g['seed'].nunique()}" for algo, g in df.groupby("algo"))
-            paths += make_figures(df, out / cell.name, title=f"factorial cell {cell.name} (seeds: {seeds})")
+    for cell, arms in cell_rows(runs).items():
+        df = pd.concat(arms.values(), ignore_index=True)
+        seeds = ", ".join(f"{algo} {g['seed'].nunique()}" for algo, g in df.groupby("algo"))
+        paths += make_figures(df, out / cell, title=f"factorial cell {cell} (seeds: {seeds})")
     return paths
 
 
