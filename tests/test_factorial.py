@@ -1,5 +1,6 @@
 """The factorial's registered metrics and rules (docs/factorial.md) on rows whose answers are known."""
 
+import json
 import math
 from pathlib import Path
 
@@ -81,3 +82,40 @@ def test_figures_draw_each_cell_with_every_arm(tmp_path: Path) -> None:
     factorial.main(["--runs", str(tmp_path / "runs"), "--out", str(tmp_path / "out"), "--figures"])
     names = sorted(p.name for p in (tmp_path / "out" / "cell").iterdir())
     assert names == ["fig3_goal_rate.png", "fig4_reward_per_step.png", "fig5_route_share.png"]
+
+
+def bonus_cells(tmp_path: Path, twoda2c_reward: float) -> Path:
+    """Cells ``ent0`` (A2C fails) and ``ent0.05`` (A2C learns at 0.28), TwoDimA2C at 0 as given."""
+    rng = np.random.default_rng(1)
+    failed = [rows(s, [1.0], reward=-0.06 + rng.normal(0, 1e-3)).assign(goal_rate=0.0) for s in range(10)]
+    write_arm(tmp_path / "ent0" / "a2c", failed)
+    write_arm(
+        tmp_path / "ent0" / "twoda2c",
+        [rows(s, [0.0], reward=twoda2c_reward + rng.normal(0, 1e-3), algo="twoda2c") for s in range(10)],
+    )
+    write_arm(tmp_path / "ent0.05" / "a2c", [rows(s, [0.0], reward=0.28 + rng.normal(0, 1e-3)) for s in range(10)])
+    return tmp_path
+
+
+@pytest.mark.parametrize(("reward", "verdict"), [(0.28, "holds"), (0.25, "fails")])
+def test_the_bonus_claim_compares_the_2d_arm_without_bonus_to_a2c_at_its_best(
+    tmp_path: Path, reward: float, verdict: str
+) -> None:
+    claim = factorial.bonus_claim(factorial.read_cells(bonus_cells(tmp_path, reward)))
+    assert f"its best, `ent0.05`): **{verdict}**" in claim
+    assert "provisional: short of 10 seeds or cells: ent0.01)" in claim and "bonus matters: True" in claim
+
+
+def test_the_bonus_claim_is_untested_when_a2c_does_best_without_bonus(tmp_path: Path) -> None:
+    runs = bonus_cells(tmp_path, 0.28)
+    for csv in (runs / "ent0.05" / "a2c" / "pairs").glob("*.csv"):
+        pd.read_csv(csv).assign(reward_per_step=-0.5).to_csv(csv, index=False)
+    assert "**untested: the entropy bonus does not matter" in factorial.bonus_claim(factorial.read_cells(runs))
+
+
+def test_a_bonus_cell_at_another_ent_coef_is_refused(tmp_path: Path) -> None:
+    (tmp_path / "ent0.01" / "a2c").mkdir(parents=True)
+    config = {"hyperparams": {"a2c": {"ent_coef": "0.05"}}}
+    (tmp_path / "ent0.01" / "a2c" / "config.json").write_text(json.dumps(config))
+    with pytest.raises(ValueError, match=r"'ent0\.01'.*'0\.05'"):
+        factorial.check_bonus_cells(tmp_path)

@@ -6,7 +6,8 @@ reads their rows and applies the registered metrics and rules; it runs nothing. 
 1-150), the final detour and shortcut shares, reward per step and collision rate (last 10% of the
 epochs), and the interest share. Per cell and arm: means with 95% intervals over seeds (Wilson for
 the share that learned). Per cell: each 2D arm minus ``a2c`` with a Welch interval, and the rules'
-verdicts. With ``--figures``, the paper's figures 3-5 per cell (extra ``plots``).
+verdicts. Across the exploration-bonus cells (``ent0``, ``ent0.01``, ``ent0.05``): the test of "the
+interest replaces a tuned entropy bonus" (:func:`bonus_claim`). With ``--figures``, the paper's figures 3-5 per cell (extra ``plots``).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ import numpy as np
 
 from sb3_twodrl.experiments.ablation import interval, summarize_run
 from sb3_twodrl.experiments.grid import collect_results
-from sb3_twodrl.experiments.intervals import welch_ci
+from sb3_twodrl.experiments.intervals import welch_ci, wilson
 
 EARLY_EPOCHS = 150
 """The paper's window for its actor-critic's detour (section 3.4): epochs 1-150."""
@@ -29,6 +30,11 @@ FINAL_SHARE = 0.1
 """The final metrics average the last 10% of a run's epochs."""
 DETOUR_ON = 0.3
 """A2C's detour preference is on when the lower end of its early detour share's interval reaches this."""
+BONUS_CELLS = {"ent0": 0.0, "ent0.01": 0.01, "ent0.05": 0.05}
+"""The exploration-bonus cells at 64 envs and MLP, by folder name, and their ``ent_coef``."""
+REWARD_MARGIN = 0.005
+"""The bonus claim's margin on reward per step: about 2% of the protocol's 0.28."""
+SEEDS_PER_CELL = 10
 METRICS = (
     "learned",
     "epochs_to_half",
@@ -137,6 +143,64 @@ def verdicts(cells: dict[str, dict[str, list[dict[str, float]]]], baseline: str 
     return "\n".join(lines)
 
 
+def _learned(runs: list[dict[str, float]]) -> tuple[int, int, tuple[float, float]]:
+    k, n = int(sum(r["learned"] for r in runs)), len(runs)
+    return k, n, wilson(k, n)
+
+
+def _reward_diff(a: list[dict[str, float]], b: list[dict[str, float]]) -> tuple[float, float, float]:
+    diff, half = welch_ci([r["reward_per_step"] for r in a], [r["reward_per_step"] for r in b])
+    return diff, diff - half, diff + half
+
+
+def check_bonus_cells(runs: Path) -> None:
+    """Refuse a :data:`BONUS_CELLS` folder whose arms ran at another ``ent_coef`` than its name says."""
+    for cell, coef in BONUS_CELLS.items():
+        for config in sorted((runs / cell).glob("*/config.json")):
+            for arm, params in json.loads(config.read_text())["hyperparams"].items():
+                if float(params.get("ent_coef", math.nan)) != coef:
+                    raise ValueError(f"runs: cell {cell!r} arm {arm!r} has ent_coef {params.get('ent_coef')!r}")
+
+
+def bonus_claim(cells: dict[str, dict[str, list[dict[str, float]]]], arm: str = "twoda2c") -> str:
+    """Markdown: the registered test of "the interest replaces a tuned entropy bonus".
+
+    A2C's best ``ent_coef`` is the :data:`BONUS_CELLS` cell with its highest mean reward per step. The
+    claim holds if ``arm`` at ``ent_coef`` 0 is within :data:`REWARD_MARGIN` of it (Welch lower bound)
+    and learns on as many seeds, or on a share whose Wilson interval overlaps. It is informative only
+    if the bonus matters to A2C: ``a2c`` at 0 worse than at its best by a resolved Welch interval, or
+    learning on fewer seeds with disjoint Wilson intervals. Provisional while a cell lacks seeds.
+    """
+    a2c = {cell: cells[cell]["a2c"] for cell in BONUS_CELLS if "a2c" in cells.get(cell, {})}
+    if "ent0" not in a2c or arm not in cells["ent0"]:
+        return f"Bonus claim: not testable yet (needs `a2c` and `{arm}` in cell `ent0`)."
+    best = max(a2c, key=lambda cell: float(np.mean([r["reward_per_step"] for r in a2c[cell]])))
+    ours, theirs, bare = cells["ent0"][arm], a2c[best], a2c["ent0"]
+    diff, low, high = _reward_diff(ours, theirs)
+    (k1, n1, w1), (k2, n2, w2) = _learned(ours), _learned(theirs)
+    holds = low > -REWARD_MARGIN and (k1 / n1 >= k2 / n2 or (w1[0] <= w2[1] and w2[0] <= w1[1]))
+    if best == "ent0":
+        matters, why = False, "A2C's best bonus is 0"
+    else:
+        _, _, bare_high = _reward_diff(bare, theirs)
+        (_, _, wb), (_, _, wt) = _learned(bare), _learned(theirs)
+        matters = bare_high < 0 or wb[1] < wt[0]
+        why = (
+            f"`a2c` at 0 minus at its best, reward per step upper bound {bare_high:+.4f}; learned "
+            f"[{wb[0]:.2f}, {wb[1]:.2f}] vs [{wt[0]:.2f}, {wt[1]:.2f}]"
+        )
+    missing = [cell for cell in BONUS_CELLS if cell not in a2c]
+    missing += [f"{cell}/a2c" for cell, runs in a2c.items() if len(runs) < SEEDS_PER_CELL]
+    missing += [f"ent0/{arm}"] if len(ours) < SEEDS_PER_CELL else []
+    verdict = ("holds" if holds else "fails") if matters else "untested: the entropy bonus does not matter to A2C here"
+    return (
+        f"Bonus claim (`{arm}` at `ent_coef` 0 against `a2c` at its best, `{best}`): **{verdict}**"
+        + (f" (provisional: short of {SEEDS_PER_CELL} seeds or cells: {', '.join(missing)})" if missing else "")
+        + f". Reward per step difference {diff:+.4f} [{low:+.4f}, {high:+.4f}]; learned {k1}/{n1} "
+        f"[{w1[0]:.2f}, {w1[1]:.2f}] vs {k2}/{n2} [{w2[0]:.2f}, {w2[1]:.2f}]; bonus matters: {matters} ({why})."
+    )
+
+
 def figures(runs: Path, out: Path) -> list[Path]:
     """The paper's figures 3-5 of each cell, every arm's seeds (:func:`~sb3_twodrl.experiments.plots.make_figures`):
     ``<out>/<cell>/fig*.png``."""
@@ -162,8 +226,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
+    check_bonus_cells(args.runs)
     cells = read_cells(args.runs)
-    text = table(cells) + "\n\n" + verdicts(cells) + "\n"
+    text = table(cells) + "\n\n" + verdicts(cells) + "\n\n" + bonus_claim(cells) + "\n"
     if args.out:
         args.out.mkdir(parents=True, exist_ok=True)
         (args.out / "table.md").write_text(text)
