@@ -7,7 +7,8 @@ reads their rows and applies the registered metrics and rules; it runs nothing. 
 epochs), and the interest share. Per cell and arm: means with 95% intervals over seeds (Wilson for
 the share that learned). Per cell: each 2D arm minus ``a2c`` with a Welch interval, and the rules'
 verdicts. Across the exploration-bonus cells (``ent0``, ``ent0.01``, ``ent0.05``): the test of "the
-interest replaces a tuned entropy bonus" (:func:`bonus_claim`). With ``--figures``, the paper's figures 3-5 per cell (extra ``plots``).
+interest replaces a tuned entropy bonus" (:func:`bonus_claim`). With ``--figures``, the paper's
+figures 3-5 per cell (extra ``plots``).
 """
 
 from __future__ import annotations
