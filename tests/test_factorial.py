@@ -68,6 +68,8 @@ def test_the_rules_turn_on_where_the_paper_result_is_and_off_where_it_is_not(tmp
     assert lines[0].rstrip(" |").endswith("False") and "| False |" in lines[0]
     assert lines[1].rstrip(" |").endswith("True") and "| True |" in lines[1]
     assert factorial.table(cells).count("\n") == 1 + 4
+    per_seed = factorial.seeds_table(cells).splitlines()[2:]
+    assert len(per_seed) == 20 and per_seed[0].startswith("| ours | a2c | 0 | 1.000 | 3.000 | 0.000 |")
 
 
 def test_no_rows_is_an_error(tmp_path: Path) -> None:

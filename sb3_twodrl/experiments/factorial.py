@@ -114,6 +114,17 @@ def table(cells: dict[str, dict[str, list[dict[str, float]]]]) -> str:
     return "\n".join(lines)
 
 
+def seeds_table(cells: dict[str, dict[str, list[dict[str, float]]]]) -> str:
+    """Markdown: one row per (cell, arm, seed), each metric of :func:`run_metrics` ("-" where undefined)."""
+    lines = ["| cell | arm | seed | " + " | ".join(METRICS) + " |", "|---" * (len(METRICS) + 3) + "|"]
+    for cell, arms in cells.items():
+        for arm, runs in arms.items():
+            for run in runs:
+                values = ["-" if math.isnan(run[key]) else f"{run[key]:.3f}" for key in METRICS]
+                lines.append(f"| {cell} | {arm} | {run['seed']} | " + " | ".join(values) + " |")
+    return "\n".join(lines)
+
+
 def verdicts(cells: dict[str, dict[str, list[dict[str, float]]]], baseline: str = "a2c") -> str:
     """Markdown: per cell, A2C's detour rule and, per 2D arm, its Welch differences and the shortcut rule."""
     lines = [
@@ -229,7 +240,7 @@ def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
     check_bonus_cells(args.runs)
     cells = read_cells(args.runs)
-    text = table(cells) + "\n\n" + verdicts(cells) + "\n\n" + bonus_claim(cells) + "\n"
+    text = "\n\n".join([table(cells), verdicts(cells), bonus_claim(cells), "Per seed:", seeds_table(cells)]) + "\n"
     if args.out:
         args.out.mkdir(parents=True, exist_ok=True)
         (args.out / "table.md").write_text(text)
