@@ -121,3 +121,10 @@ def test_a_bonus_cell_at_another_ent_coef_is_refused(tmp_path: Path) -> None:
     (tmp_path / "ent0.01" / "a2c" / "config.json").write_text(json.dumps(config))
     with pytest.raises(ValueError, match=r"'ent0\.01'.*'0\.05'"):
         factorial.check_bonus_cells(tmp_path)
+
+
+def test_effects_measure_each_cell_against_the_protocol_cell(tmp_path: Path) -> None:
+    lines = factorial.effects(factorial.read_cells(bonus_cells(tmp_path, 0.28))).splitlines()[2:]
+    assert len(lines) == 1 and lines[0].startswith("| ent0 | a2c | 0/10 vs 10/10 | +1.000 [+1.000, +1.000] | +0.000 ")
+    diff = float(lines[0].split("|")[-2].split()[0])
+    assert diff == pytest.approx(-0.34, abs=0.01)

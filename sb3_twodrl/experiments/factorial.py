@@ -36,6 +36,9 @@ BONUS_CELLS = {"ent0": 0.0, "ent0.01": 0.01, "ent0.05": 0.05}
 REWARD_MARGIN = 0.005
 """The bonus claim's margin on reward per step: about 2% of the protocol's 0.28."""
 SEEDS_PER_CELL = 10
+PROTOCOL_CELL = "ent0.05"
+"""The cell at the protocol's shared settings, against which each factor's effect is measured."""
+EFFECT_METRICS = ("early_detour_share", "final_shortcut_share", "reward_per_step")
 METRICS = (
     "learned",
     "epochs_to_half",
@@ -155,6 +158,33 @@ def verdicts(cells: dict[str, dict[str, list[dict[str, float]]]], baseline: str 
     return "\n".join(lines)
 
 
+def _diff(a: list[dict[str, float]], b: list[dict[str, float]], key: str) -> str:
+    x, y = [r[key] for r in a if np.isfinite(r[key])], [r[key] for r in b if np.isfinite(r[key])]
+    if len(x) < 2 or len(y) < 2:
+        return "-"
+    diff, half = welch_ci(x, y)
+    return f"{diff:+.3f} [{diff - half:+.3f}, {diff + half:+.3f}]"
+
+
+def effects(cells: dict[str, dict[str, list[dict[str, float]]]], reference: str = PROTOCOL_CELL) -> str:
+    """Markdown: each cell's effect against ``reference`` per arm in both: seeds learned, and the Welch
+    interval of (cell minus reference) on each of :data:`EFFECT_METRICS`."""
+    heads = " | ".join(f"{key} minus reference" for key in EFFECT_METRICS)
+    lines = [
+        f"| cell | arm | learned (cell vs reference) | {heads} |",
+        "|---" * (len(EFFECT_METRICS) + 3) + "|",
+    ]
+    for cell, arms in cells.items():
+        for arm, runs in arms.items():
+            base = cells.get(reference, {}).get(arm)
+            if cell == reference or base is None:
+                continue
+            (k1, n1, _), (k2, n2, _) = _learned(runs), _learned(base)
+            diffs = " | ".join(_diff(runs, base, key) for key in EFFECT_METRICS)
+            lines.append(f"| {cell} | {arm} | {k1}/{n1} vs {k2}/{n2} | {diffs} |")
+    return "\n".join(lines)
+
+
 def _learned(runs: list[dict[str, float]]) -> tuple[int, int, tuple[float, float]]:
     k, n = int(sum(r["learned"] for r in runs)), len(runs)
     return k, n, wilson(k, n)
@@ -240,7 +270,16 @@ def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
     check_bonus_cells(args.runs)
     cells = read_cells(args.runs)
-    text = "\n\n".join([table(cells), verdicts(cells), bonus_claim(cells), "Per seed:", seeds_table(cells)]) + "\n"
+    parts = [
+        table(cells),
+        verdicts(cells),
+        bonus_claim(cells),
+        f"Effects against the protocol's cell `{PROTOCOL_CELL}`:",
+        effects(cells),
+        "Per seed:",
+        seeds_table(cells),
+    ]
+    text = "\n\n".join(parts) + "\n"
     if args.out:
         args.out.mkdir(parents=True, exist_ok=True)
         (args.out / "table.md").write_text(text)
