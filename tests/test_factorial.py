@@ -128,3 +128,9 @@ def test_effects_measure_each_cell_against_the_protocol_cell(tmp_path: Path) -> 
     assert len(lines) == 1 and lines[0].startswith("| ent0 | a2c | 0/10 vs 10/10 | +1.000 [+1.000, +1.000] | +0.000 ")
     diff = float(lines[0].split("|")[-2].split()[0])
     assert diff == pytest.approx(-0.34, abs=0.01)
+
+
+def test_an_arm_without_finished_rows_is_left_out(tmp_path: Path) -> None:
+    write_arm(tmp_path / "ent0" / "a2c", [rows(0, [0.5]), rows(1, [0.5])])
+    (tmp_path / "ent0.05" / "a2c" / "pairs").mkdir(parents=True)
+    assert list(factorial.read_cells(tmp_path)) == ["ent0"]

@@ -75,10 +75,12 @@ def run_metrics(rows: Any) -> dict[str, float]:
 
 
 def cell_rows(runs: Path) -> dict[str, dict[str, Any]]:
-    """Per cell folder of ``runs``, per arm folder with rows, its rows (:func:`collect_results`)."""
+    """Per cell folder of ``runs``, per arm folder with rows, its rows (:func:`collect_results`); an arm
+    whose first seed is still running is left out."""
     cells = {}
     for cell in sorted(p for p in runs.iterdir() if p.is_dir()):
-        arms = {arm.name: collect_results(arm) for arm in sorted(cell.iterdir()) if (arm / "pairs").is_dir()}
+        folders = sorted(arm for arm in cell.iterdir() if (arm / "pairs").is_dir())
+        arms = {arm.name: rows for arm in folders if len(rows := collect_results(arm))}
         if arms:
             cells[cell.name] = arms
     return cells
