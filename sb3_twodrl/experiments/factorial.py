@@ -36,6 +36,7 @@ BONUS_CELLS = {"ent0": 0.0, "ent0.01": 0.01, "ent0.05": 0.05}
 REWARD_MARGIN = 0.005
 """The bonus claim's margin on reward per step: about 2% of the protocol's 0.28."""
 SEEDS_PER_CELL = 10
+"""The registered seeds per (cell, arm); a rule on fewer is provisional."""
 PROTOCOL_CELL = "ent0.05"
 """The cell at the protocol's shared settings, against which each factor's effect is measured."""
 EFFECT_METRICS = ("early_detour_share", "final_shortcut_share", "reward_per_step")
@@ -130,6 +131,16 @@ def seeds_table(cells: dict[str, dict[str, list[dict[str, float]]]]) -> str:
     return "\n".join(lines)
 
 
+def _welch(a: list[dict[str, float]], b: list[dict[str, float]], key: str) -> tuple[float, float, float]:
+    """``key``'s mean over ``a`` minus over ``b`` and its 95% Welch interval, NaNs left out (NaN if a side
+    has fewer than two runs)."""
+    x, y = [r[key] for r in a if np.isfinite(r[key])], [r[key] for r in b if np.isfinite(r[key])]
+    if len(x) < 2 or len(y) < 2:
+        return math.nan, math.nan, math.nan
+    diff, half = welch_ci(x, y)
+    return diff, diff - half, diff + half
+
+
 def verdicts(cells: dict[str, dict[str, list[dict[str, float]]]], baseline: str = "a2c") -> str:
     """Markdown: per cell, A2C's detour rule and, per 2D arm, its Welch differences and the shortcut rule."""
     lines = [
@@ -146,26 +157,18 @@ def verdicts(cells: dict[str, dict[str, list[dict[str, float]]]], baseline: str 
         for arm, runs in arms.items():
             if arm == baseline:
                 continue
-            diffs = []
-            for key in ("final_shortcut_share", "reward_per_step"):
-                a = [r[key] for r in runs if np.isfinite(r[key])]
-                b = [r[key] for r in base if np.isfinite(r[key])]
-                diffs.append(welch_ci(a, b) if len(a) > 1 and len(b) > 1 else (math.nan, math.nan))
-            (share, half), (reward, reward_half) = diffs
-            on = bool(share - half > 0)
+            share, share_low, share_high = _welch(runs, base, "final_shortcut_share")
+            reward, reward_low, reward_high = _welch(runs, base, "reward_per_step")
             lines.append(
-                f"| {cell} | {arm} | {detour_on} | {share:+.3f} [{share - half:+.3f}, {share + half:+.3f}] "
-                f"| {reward:+.4f} [{reward - reward_half:+.4f}, {reward + reward_half:+.4f}] | {on} |"
+                f"| {cell} | {arm} | {detour_on} | {share:+.3f} [{share_low:+.3f}, {share_high:+.3f}] "
+                f"| {reward:+.4f} [{reward_low:+.4f}, {reward_high:+.4f}] | {bool(share_low > 0)} |"
             )
     return "\n".join(lines)
 
 
 def _diff(a: list[dict[str, float]], b: list[dict[str, float]], key: str) -> str:
-    x, y = [r[key] for r in a if np.isfinite(r[key])], [r[key] for r in b if np.isfinite(r[key])]
-    if len(x) < 2 or len(y) < 2:
-        return "-"
-    diff, half = welch_ci(x, y)
-    return f"{diff:+.3f} [{diff - half:+.3f}, {diff + half:+.3f}]"
+    diff, low, high = _welch(a, b, key)
+    return "-" if math.isnan(diff) else f"{diff:+.3f} [{low:+.3f}, {high:+.3f}]"
 
 
 def effects(cells: dict[str, dict[str, list[dict[str, float]]]], reference: str = PROTOCOL_CELL) -> str:
@@ -192,11 +195,6 @@ def _learned(runs: list[dict[str, float]]) -> tuple[int, int, tuple[float, float
     return k, n, wilson(k, n)
 
 
-def _reward_diff(a: list[dict[str, float]], b: list[dict[str, float]]) -> tuple[float, float, float]:
-    diff, half = welch_ci([r["reward_per_step"] for r in a], [r["reward_per_step"] for r in b])
-    return diff, diff - half, diff + half
-
-
 def check_bonus_cells(runs: Path) -> None:
     """Refuse a :data:`BONUS_CELLS` folder whose arms ran at another ``ent_coef`` than its name says."""
     for cell, coef in BONUS_CELLS.items():
@@ -220,13 +218,13 @@ def bonus_claim(cells: dict[str, dict[str, list[dict[str, float]]]], arm: str = 
         return f"Bonus claim: not testable yet (needs `a2c` and `{arm}` in cell `ent0`)."
     best = max(a2c, key=lambda cell: float(np.mean([r["reward_per_step"] for r in a2c[cell]])))
     ours, theirs, bare = cells["ent0"][arm], a2c[best], a2c["ent0"]
-    diff, low, high = _reward_diff(ours, theirs)
+    diff, low, high = _welch(ours, theirs, "reward_per_step")
     (k1, n1, w1), (k2, n2, w2) = _learned(ours), _learned(theirs)
     holds = low > -REWARD_MARGIN and (k1 / n1 >= k2 / n2 or (w1[0] <= w2[1] and w2[0] <= w1[1]))
     if best == "ent0":
         matters, why = False, "A2C's best bonus is 0"
     else:
-        _, _, bare_high = _reward_diff(bare, theirs)
+        _, _, bare_high = _welch(bare, theirs, "reward_per_step")
         (_, _, wb), (_, _, wt) = _learned(bare), _learned(theirs)
         matters = bare_high < 0 or wb[1] < wt[0]
         why = (
