@@ -134,3 +134,12 @@ def test_an_arm_without_finished_rows_is_left_out(tmp_path: Path) -> None:
     write_arm(tmp_path / "ent0" / "a2c", [rows(0, [0.5]), rows(1, [0.5])])
     (tmp_path / "ent0.05" / "a2c" / "pairs").mkdir(parents=True)
     assert list(factorial.read_cells(tmp_path)) == ["ent0"]
+
+
+def test_an_arm_that_never_reaches_a_route_has_no_shortcut_difference(tmp_path: Path) -> None:
+    """An arm whose runs all end without a labelled trial: "-" for its share difference, and the rule off."""
+    write_arm(tmp_path / "cell" / "a2c", [rows(s, [0.0]) for s in range(3)])
+    never = [rows(s, [math.nan], algo="twoda2c").assign(shortcut_share=math.nan) for s in range(3)]
+    write_arm(tmp_path / "cell" / "twoda2c", never)
+    line = factorial.verdicts(factorial.read_cells(tmp_path)).splitlines()[2]
+    assert line.split("|")[4].strip() == "-" and line.rstrip(" |").endswith("False") and "nan" not in line

@@ -157,18 +157,18 @@ def verdicts(cells: dict[str, dict[str, list[dict[str, float]]]], baseline: str 
         for arm, runs in arms.items():
             if arm == baseline:
                 continue
-            share, share_low, share_high = _welch(runs, base, "final_shortcut_share")
-            reward, reward_low, reward_high = _welch(runs, base, "reward_per_step")
+            share = _welch(runs, base, "final_shortcut_share")
+            reward = _welch(runs, base, "reward_per_step")
             lines.append(
-                f"| {cell} | {arm} | {detour_on} | {share:+.3f} [{share_low:+.3f}, {share_high:+.3f}] "
-                f"| {reward:+.4f} [{reward_low:+.4f}, {reward_high:+.4f}] | {bool(share_low > 0)} |"
+                f"| {cell} | {arm} | {detour_on} | {_format(share)} | {_format(reward, 4)} | {bool(share[1] > 0)} |"
             )
     return "\n".join(lines)
 
 
-def _diff(a: list[dict[str, float]], b: list[dict[str, float]], key: str) -> str:
-    diff, low, high = _welch(a, b, key)
-    return "-" if math.isnan(diff) else f"{diff:+.3f} [{low:+.3f}, {high:+.3f}]"
+def _format(difference: tuple[float, float, float], digits: int = 3) -> str:
+    """``+d [+low, +high]`` of a :func:`_welch` difference; "-" where it is undefined."""
+    diff, low, high = difference
+    return "-" if math.isnan(diff) else f"{diff:+.{digits}f} [{low:+.{digits}f}, {high:+.{digits}f}]"
 
 
 def effects(cells: dict[str, dict[str, list[dict[str, float]]]], reference: str = PROTOCOL_CELL) -> str:
@@ -185,7 +185,7 @@ def effects(cells: dict[str, dict[str, list[dict[str, float]]]], reference: str 
             if cell == reference or base is None:
                 continue
             (k1, n1, _), (k2, n2, _) = _learned(runs), _learned(base)
-            diffs = " | ".join(_diff(runs, base, key) for key in EFFECT_METRICS)
+            diffs = " | ".join(_format(_welch(runs, base, key)) for key in EFFECT_METRICS)
             lines.append(f"| {cell} | {arm} | {k1}/{n1} vs {k2}/{n2} | {diffs} |")
     return "\n".join(lines)
 
