@@ -1,6 +1,7 @@
 """``results/MANIFEST.md`` lists every file under ``results/``, and every link into ``results/`` resolves."""
 
 import re
+import subprocess
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -22,9 +23,25 @@ def documents() -> list[Path]:
     return [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md")), MANIFEST]
 
 
+def ignored() -> set[str]:
+    """Files under ``results/`` that git ignores: the run folders a command writes beside its results."""
+    try:
+        out = subprocess.run(
+            ["git", "ls-files", "--others", "--ignored", "--exclude-standard", "results"],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
+    except (OSError, subprocess.CalledProcessError):  # not a git checkout
+        return set()
+    return {Path(p).relative_to("results").as_posix() for p in out.splitlines()}
+
+
 def test_every_result_file_is_in_the_manifest() -> None:
     listed = set(manifest_entries())
     on_disk = {p.relative_to(RESULTS).as_posix() for p in RESULTS.rglob("*") if p.is_file() and p != MANIFEST}
+    on_disk -= ignored()
     assert sorted(on_disk - listed) == [], "files under results/ that MANIFEST.md does not list"
 
 
