@@ -143,3 +143,37 @@ def test_an_arm_that_never_reaches_a_route_has_no_shortcut_difference(tmp_path: 
     write_arm(tmp_path / "cell" / "twoda2c", never)
     line = factorial.verdicts(factorial.read_cells(tmp_path)).splitlines()[2]
     assert line.split("|")[4].strip() == "-" and line.rstrip(" |").endswith("False") and "nan" not in line
+
+
+def long_rows(seed: int, window_detour: float, shortcut_end: float, algo: str) -> pd.DataFrame:
+    """1000 epochs: detour share ``window_detour`` over epochs 151-400, routes split otherwise."""
+    df = pd.concat([rows(seed, [0.5], algo=algo)] * 5, ignore_index=True)
+    df["epoch"] = np.arange(1, 1001)
+    detour = np.where(df["epoch"].between(151, 400), window_detour, 0.5)
+    detour[-100:] = 1.0 - shortcut_end
+    return df.assign(detour_share=detour, shortcut_share=1.0 - detour)
+
+
+def test_the_paper_result_is_read_from_a_complete_long_cell(tmp_path: Path) -> None:
+    rng = np.random.default_rng(1)
+    for cell, a2c_detour in (("paper_like", 0.9), ("ours", 0.1)):
+        write_arm(tmp_path / cell / "a2c", [long_rows(s, a2c_detour, rng.uniform(0, 0.1), "a2c") for s in range(10)])
+        frames = [long_rows(s, 0.5, rng.uniform(0.9, 1.0), "twoda2c") for s in range(10)]
+        write_arm(tmp_path / cell / "twoda2c", frames)
+    write_arm(tmp_path / "short" / "a2c", [rows(s, [0.9]) for s in range(10)])  # 200 epochs: not read here
+    cells = factorial.read_cells(tmp_path)
+    assert cells["paper_like"]["a2c"][0]["window_detour_share"] == pytest.approx(0.9)
+    assert math.isnan(cells["short"]["a2c"][0]["window_detour_share"])
+    lines = factorial.paper_result(cells).splitlines()[2:]
+    assert [line.split("|")[1].strip() for line in lines] == ["ours", "paper_like"]
+    assert lines[0].rstrip(" |").endswith("False") and lines[1].rstrip(" |").endswith("True")
+
+
+def test_a_long_cell_short_of_seeds_has_no_rule_read(tmp_path: Path) -> None:
+    """Amendment 8: the rules at 1000 epochs wait for every seed of both arms."""
+    write_arm(tmp_path / "cell_1000" / "a2c", [long_rows(s, 0.9, 0.0, "a2c") for s in range(3)])
+    write_arm(tmp_path / "cell_1000" / "twoda2c", [long_rows(s, 0.5, 1.0, "twoda2c") for s in range(2)])
+    cells = factorial.read_cells(tmp_path)
+    for text in (factorial.verdicts(cells), factorial.paper_result(cells)):
+        line = text.splitlines()[2]
+        assert "not read (3 and 2 of 10 seeds)" in line and "True" not in line and "False" not in line

@@ -6,9 +6,10 @@ reads their rows and applies the registered metrics and rules; it runs nothing. 
 1-150), the final detour and shortcut shares, reward per step and collision rate (last 10% of the
 epochs), and the interest share. Per cell and arm: means with 95% intervals over seeds (Wilson for
 the share that learned). Per cell: each 2D arm minus ``a2c`` with a Welch interval, and the rules'
-verdicts. Across the exploration-bonus cells (``ent0``, ``ent0.01``, ``ent0.05``): the test of "the
-interest replaces a tuned entropy bonus" (:func:`bonus_claim`). With ``--figures``, the paper's
-figures 3-5 per cell (extra ``plots``).
+verdicts; per cell run to 1000 epochs, whether the paper's figures 3-5 reappear (:func:`paper_result`),
+read only once both arms have every seed (amendment 8). Across the exploration-bonus cells
+(``ent0``, ``ent0.01``, ``ent0.05``): the test of "the interest replaces a tuned entropy bonus"
+(:func:`bonus_claim`). With ``--figures``, the paper's figures 3-5 per cell (extra ``plots``).
 """
 
 from __future__ import annotations
@@ -39,6 +40,12 @@ SEEDS_PER_CELL = 10
 """The registered seeds per (cell, arm); a rule on fewer is provisional."""
 PROTOCOL_CELL = "ent0.05"
 """The cell at the protocol's shared settings, against which each factor's effect is measured."""
+LONG_EPOCHS = 1000
+"""The extension's length: a cell whose runs reach it is read by :func:`paper_result`."""
+PAPER_WINDOW = (151, 400)
+"""Epochs over which A2C's detour share must reach :data:`PAPER_SHARE` for the paper's figures to reappear."""
+PAPER_SHARE = 0.5
+"""The detour share (A2C, :data:`PAPER_WINDOW`) and final shortcut share (2D arm) the paper's result needs."""
 EFFECT_METRICS = ("early_detour_share", "final_shortcut_share", "reward_per_step")
 METRICS = (
     "learned",
@@ -58,6 +65,8 @@ def run_metrics(rows: Any) -> dict[str, float]:
     n_final = max(1, round(FINAL_SHARE * len(rows)))
     final = rows.iloc[-n_final:]
     early = rows.loc[rows["epoch"] <= EARLY_EPOCHS, "detour_share"].to_numpy(dtype=float)
+    first, last = PAPER_WINDOW
+    window = rows.loc[rows["epoch"].between(first, last), "detour_share"].to_numpy(dtype=float)
 
     def mean(values: np.ndarray) -> float:
         values = values[np.isfinite(values)]
@@ -72,6 +81,8 @@ def run_metrics(rows: Any) -> dict[str, float]:
         "reward_per_step": mean(final["reward_per_step"].to_numpy(dtype=float)),
         "collision_rate": mean(final["collision_rate"].to_numpy(dtype=float)),
         "interest_share": summary["interest_share"],
+        "epochs": int(rows["epoch"].max()),
+        "window_detour_share": mean(window) if rows["epoch"].max() >= last else math.nan,
     }
 
 
@@ -159,9 +170,53 @@ def verdicts(cells: dict[str, dict[str, list[dict[str, float]]]], baseline: str 
                 continue
             share = _welch(runs, base, "final_shortcut_share")
             reward = _welch(runs, base, "reward_per_step")
+            if (short := _unread(base, runs)) is not None:
+                lines.append(f"| {cell} | {arm} | {short} | - | - | {short} |")
+                continue
             lines.append(
                 f"| {cell} | {arm} | {detour_on} | {_format(share)} | {_format(reward, 4)} | {bool(share[1] > 0)} |"
             )
+    return "\n".join(lines)
+
+
+def _unread(base: list[dict[str, float]], runs: list[dict[str, float]]) -> str | None:
+    """Why a long cell's rules are not read yet: its arms short of seeds (amendment 8); None otherwise."""
+    if max(r["epochs"] for r in base + runs) < LONG_EPOCHS or min(len(base), len(runs)) >= SEEDS_PER_CELL:
+        return None
+    return f"not read ({len(base)} and {len(runs)} of {SEEDS_PER_CELL} seeds)"
+
+
+def paper_result(
+    cells: dict[str, dict[str, list[dict[str, float]]]], arm: str = "twoda2c", baseline: str = "a2c"
+) -> str:
+    """Markdown: per cell run to :data:`LONG_EPOCHS`, whether the paper's figures 3-5 reappear.
+
+    They do if A2C's mean detour share over :data:`PAPER_WINDOW` is at least :data:`PAPER_SHARE`, and
+    ``arm``'s mean final shortcut share is at least :data:`PAPER_SHARE` with its Welch difference from
+    A2C's wholly above 0. Read only once both arms have :data:`SEEDS_PER_CELL` seeds of that length.
+    """
+    lines = [
+        f"| cell | A2C detour share, epochs {PAPER_WINDOW[0]}-{PAPER_WINDOW[1]} | {arm} final shortcut share "
+        "| final shortcut share minus A2C | paper's figures reappear |",
+        "|---|---|---|---|---|",
+    ]
+    for cell, arms in cells.items():
+        base = [r for r in arms.get(baseline, []) if r["epochs"] >= LONG_EPOCHS]
+        runs = [r for r in arms.get(arm, []) if r["epochs"] >= LONG_EPOCHS]
+        if not base and not runs:
+            continue
+        detour = _cell([r["window_detour_share"] for r in base], False)
+        shortcut = _cell([r["final_shortcut_share"] for r in runs], False)
+        if min(len(base), len(runs)) < SEEDS_PER_CELL:
+            lines.append(f"| {cell} | {detour} | {shortcut} | - | {_unread(base, runs)} |")
+            continue
+        share = _welch(runs, base, "final_shortcut_share")
+        on = (
+            np.nanmean([r["window_detour_share"] for r in base]) >= PAPER_SHARE
+            and np.nanmean([r["final_shortcut_share"] for r in runs]) >= PAPER_SHARE
+            and share[1] > 0
+        )
+        lines.append(f"| {cell} | {detour} | {shortcut} | {_format(share)} | {bool(on)} |")
     return "\n".join(lines)
 
 
@@ -274,6 +329,8 @@ def main(argv: list[str] | None = None) -> None:
         table(cells),
         verdicts(cells),
         bonus_claim(cells),
+        f"Cells run to {LONG_EPOCHS} epochs: do the paper's figures 3-5 reappear?",
+        paper_result(cells),
         f"Effects against the protocol's cell `{PROTOCOL_CELL}`:",
         effects(cells),
         "Per seed:",
