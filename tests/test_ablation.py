@@ -15,15 +15,18 @@ from sb3_twodrl.experiments.grid import collect_results
 BASE = {
     "a2c": {"n_envs": 4, "n_steps": 5, "gamma": 0.9, "learning_rate": 3e-3},
     "twoda2c": {"n_envs": 4, "n_steps": 5, "gamma": 0.9, "learning_rate": 3e-3, "punishment_gamma": 0.1},
+    "ppo": {"n_envs": 4, "n_steps": 16, "gamma": 0.9, "n_epochs": 4},
+    "twodppo": {"n_envs": 4, "n_steps": 16, "gamma": 0.9, "n_epochs": 4, "punishment_gamma": 0.1},
 }
 
 
 @pytest.mark.parametrize("arm", sorted(ablation.ARMS))
 def test_arms_share_every_non_2d_setting(arm: str) -> None:
     algo, hp = ablation.arm_hyperparams(arm, BASE, temperature=0.7)
-    for key, value in BASE["a2c"].items():
+    stock = "ppo" if "ppo" in arm else "a2c"
+    for key, value in BASE[stock].items():
         assert hp[key] == value, key
-    assert (algo == "a2c") == (arm == "a2c")
+    assert (algo == stock) == (arm == stock)
     if arm in ablation.FIXED:
         assert hp["temperature"] == 0.7 and hp.get("preferences", "raw") == "raw"
     else:
@@ -121,3 +124,13 @@ def test_a_factorial_cell_changes_the_shared_settings_and_the_env_for_every_arm(
         assert changed == ("0.01", "2", "{'net_arch': []}")
     with pytest.raises(ValueError, match="--set"):
         ablation.ablation([*argv, "--arms", "a2c", "--set", "ent_coef=0.01"])
+
+
+def test_the_ppo_arms_run_on_ppos_files_with_the_cells_settings(tmp_path: Path) -> None:
+    argv = ["--out", str(tmp_path), "--seeds", "0", "--epochs", "1", "-K", "4", "-M", "3", "--backend", "serial"]
+    ablation.ablation([*argv, "--arms", "ppo", "twodppo", "--set", "n_envs:2", "n_steps:8", "batch_size:16"])
+    for arm in ("ppo", "twodppo"):
+        settings = json.loads((tmp_path / arm / "config.json").read_text())["hyperparams"][arm]
+        assert (settings["n_envs"], settings["n_steps"], settings["n_epochs"]) == ("2", "8", "10")
+        assert ("punishment_gamma" in settings) == (arm == "twodppo")
+        assert len(collect_results(tmp_path / arm)) == 1

@@ -3,7 +3,8 @@
 Every arm is a grid of (arm, seed) runs of :func:`~sb3_twodrl.experiments.runner.run_pair`
 (epochs of K learning trials and M test trials, batched envs, resume), in ``<out>/<arm>/``. All arms
 share the protocol's settings (the packaged ``a2c.yml`` and ``twoda2c.yml``, whose Nomad entries
-differ only in the 2D-RL arguments); an arm changes only these (every 2D arm runs
+differ only in the 2D-RL arguments; PPO's arms ``ppo.yml`` and ``twodppo.yml``); an arm changes only
+these (every 2D arm but ``twoda2c`` and ``twodppo`` runs
 :class:`~sb3_twodrl.experiments.variants.VariantTwoDimA2C`, where its modes live):
 
 1. ``a2c``: SB3's A2C.
@@ -27,6 +28,8 @@ differ only in the 2D-RL arguments); an arm changes only these (every 2D arm run
    ``twod_fixed_compensated``: ``twod_fixed`` with that update (at a fixed ``T`` no move is uniform).
 6. ``twoda2c``: the shipped ``TwoDimA2C`` itself (``V_P`` starts at 0, where the variants keep its
    orthogonal initialisation); ``twoda2c_fixed``: it at a fixed temperature.
+7. ``ppo`` and ``twodppo``: SB3's PPO and the shipped ``TwoDimPPO``, on ``ppo.yml`` and
+   ``twodppo.yml`` (whose Nomad entries also differ only in the 2D-RL arguments).
 
 The fixed arms run after the ``paper`` arm, whose mean temperature over all its learning steps
 (``mean_temperature`` of the rows, weighted by steps) they take unless ``--fixed-temperature`` is
@@ -69,6 +72,8 @@ _BASE_ALGO = {_VARIANT: "twoda2c"}
 ARMS: dict[str, tuple[str, dict[str, Any]]] = {
     "a2c": ("a2c", {}),
     "twoda2c": ("twoda2c", {}),
+    "ppo": ("ppo", {}),
+    "twodppo": ("twodppo", {}),
     "twoda2c_fixed": ("twoda2c", {}),
     "a2c_fixed": (
         _VARIANT,
@@ -249,7 +254,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--learn-episodes", "-K", type=int, default=PRESETS["paper"]["learn_episodes"])
     p.add_argument("--test-episodes", "-M", type=int, default=PRESETS["paper"]["test_episodes"])
     p.add_argument("--fixed-temperature", type=float, help="default: the paper arm's measured mean temperature")
-    p.add_argument("--hyperparams-dir", help="folder of a2c.yml, twoda2c.yml (default: the packaged files)")
+    p.add_argument("--hyperparams-dir", help="folder of the arms' <algo>.yml (default: the packaged files)")
     p.add_argument("--checkpoint-every", type=int, default=10, help="epochs between checkpoints (0: none)")
     p.add_argument("--out", type=Path, default=Path("runs") / "ablation")
     p.add_argument("--backend", choices=("process", "ray", "serial"), default="process")
@@ -349,7 +354,8 @@ def ablation(argv: list[str] | None = None) -> dict[str, list[dict[str, float]]]
     for package in args.gym_packages:
         importlib.import_module(package)
     shared = parse_env_kwargs(args.set, "--set")
-    files = {algo: hyperparams_path(algo, args.hyperparams_dir) for algo in ("a2c", "twoda2c")}
+    algos = {_BASE_ALGO.get(ARMS[arm][0], ARMS[arm][0]) for arm in args.arms}
+    files = {algo: hyperparams_path(algo, args.hyperparams_dir) for algo in sorted(algos)}
     base = {algo: {**load_hyperparams(path, args.env), **shared} for algo, path in files.items()}
     free = [arm for arm in args.arms if arm not in FIXED]
     fixed = [arm for arm in args.arms if arm in FIXED]
