@@ -18,17 +18,18 @@ from tests.toy_envs import LatticeCorridor
 
 FIGURES = Path(__file__).resolve().parents[1] / "results" / "ablation"
 BASE = {"a2c": {"n_envs": 2, "n_steps": 8}, "twoda2c": {"n_envs": 2, "n_steps": 8, "punishment_gamma": 0.1}}
+BASE |= {"ppo": {**BASE["a2c"], "batch_size": 16}, "twodppo": {**BASE["twoda2c"], "batch_size": 16}}
 
 
-@pytest.mark.parametrize("arm", sorted(set(ablation.ARMS) - {"a2c"}))
+@pytest.mark.parametrize("arm", sorted(set(ablation.ARMS) - {"a2c", "ppo"}))
 def test_every_arm_builds_and_runs(arm: str) -> None:
     """A few hundred steps of each arm's algorithm on a small env, its variant settings in force."""
     algo, hp = ablation.arm_hyperparams(arm, BASE, temperature=0.7)
     n_envs = hp.pop("n_envs")
     env = make_vec_env(lambda: TimeLimit(LatticeCorridor(5, 3), 30), n_envs=n_envs, seed=0)
     model = algo_class(algo)("MlpPolicy", env, seed=0, **hp).learn(320)
-    if arm in ("twoda2c", "twoda2c_fixed"):  # the shipped TwoDimA2C, no variant settings
-        assert type(model) is TwoDimA2C and not set(hp) & {"interest", "preferences", "actor_update"}
+    if arm in ("twoda2c", "twoda2c_fixed", "twodppo"):  # the shipped classes, no variant settings
+        assert type(model) in (TwoDimA2C, TwoDimPPO) and not set(hp) & {"interest", "preferences", "actor_update"}
         return
     assert isinstance(model, VariantTwoDimA2C)
     for name in ("interest", "preferences", "actor_update"):
