@@ -29,7 +29,8 @@ def test_every_arm_builds_and_runs(arm: str) -> None:
     env = make_vec_env(lambda: TimeLimit(LatticeCorridor(5, 3), 30), n_envs=n_envs, seed=0)
     model = algo_class(algo)("MlpPolicy", env, seed=0, **hp).learn(320)
     if arm in ("twoda2c", "twoda2c_fixed", "twodppo"):  # the shipped classes, no variant settings
-        assert type(model) in (TwoDimA2C, TwoDimPPO) and not set(hp) & {"interest", "preferences", "actor_update"}
+        assert type(model) is (TwoDimPPO if arm == "twodppo" else TwoDimA2C)
+        assert not set(hp) & {"interest", "preferences", "actor_update"}
         return
     assert isinstance(model, VariantTwoDimA2C)
     for name in ("interest", "preferences", "actor_update"):

@@ -136,12 +136,18 @@ METRICS = (
 )
 
 
+def file_algo(arm: str) -> str:
+    """The algorithm whose hyperparameter file ``arm`` takes."""
+    algo = ARMS[arm][0]
+    return _BASE_ALGO.get(algo, algo)
+
+
 def arm_hyperparams(arm: str, base: dict[str, dict[str, Any]], temperature: float | None) -> tuple[str, dict]:
     """The algorithm name and hyperparameters of ``arm``: ``base[algo]`` with the arm's 2D settings."""
     if arm not in ARMS:
         raise ValueError(f"arm must be one of {sorted(ARMS)}, got {arm!r}")
     algo, overrides = ARMS[arm]
-    hp = {**base[_BASE_ALGO.get(algo, algo)], **overrides}
+    hp = {**base[file_algo(arm)], **overrides}
     if arm in FIXED:
         if temperature is None or not temperature > 0:
             raise ValueError(f"arm {arm!r} needs a positive fixed temperature, got {temperature!r}")
@@ -354,8 +360,7 @@ def ablation(argv: list[str] | None = None) -> dict[str, list[dict[str, float]]]
     for package in args.gym_packages:
         importlib.import_module(package)
     shared = parse_env_kwargs(args.set, "--set")
-    algos = {_BASE_ALGO.get(ARMS[arm][0], ARMS[arm][0]) for arm in args.arms}
-    files = {algo: hyperparams_path(algo, args.hyperparams_dir) for algo in sorted(algos)}
+    files = {algo: hyperparams_path(algo, args.hyperparams_dir) for algo in sorted(set(map(file_algo, args.arms)))}
     base = {algo: {**load_hyperparams(path, args.env), **shared} for algo, path in files.items()}
     free = [arm for arm in args.arms if arm not in FIXED]
     fixed = [arm for arm in args.arms if arm in FIXED]

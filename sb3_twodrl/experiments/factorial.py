@@ -65,6 +65,7 @@ def run_metrics(rows: Any) -> dict[str, float]:
     n_final = max(1, round(FINAL_SHARE * len(rows)))
     final = rows.iloc[-n_final:]
     early = rows.loc[rows["epoch"] <= EARLY_EPOCHS, "detour_share"].to_numpy(dtype=float)
+    epochs = int(rows["epoch"].max())
     first, last = PAPER_WINDOW
     window = rows.loc[rows["epoch"].between(first, last), "detour_share"].to_numpy(dtype=float)
 
@@ -81,8 +82,8 @@ def run_metrics(rows: Any) -> dict[str, float]:
         "reward_per_step": mean(final["reward_per_step"].to_numpy(dtype=float)),
         "collision_rate": mean(final["collision_rate"].to_numpy(dtype=float)),
         "interest_share": summary["interest_share"],
-        "epochs": int(rows["epoch"].max()),
-        "window_detour_share": mean(window) if rows["epoch"].max() >= last else math.nan,
+        "epochs": epochs,
+        "window_detour_share": mean(window) if epochs >= last else math.nan,
     }
 
 
@@ -168,11 +169,11 @@ def verdicts(cells: dict[str, dict[str, list[dict[str, float]]]], baseline: str 
         for arm, runs in arms.items():
             if arm == baseline:
                 continue
-            share = _welch(runs, base, "final_shortcut_share")
-            reward = _welch(runs, base, "reward_per_step")
             if (short := _unread(base, runs)) is not None:
                 lines.append(f"| {cell} | {arm} | {short} | - | - | {short} |")
                 continue
+            share = _welch(runs, base, "final_shortcut_share")
+            reward = _welch(runs, base, "reward_per_step")
             lines.append(
                 f"| {cell} | {arm} | {detour_on} | {_format(share)} | {_format(reward, 4)} | {bool(share[1] > 0)} |"
             )

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from sb3_twodrl.experiments.grid import collect_results, run_grid
+from sb3_twodrl.experiments.grid import collect_results, pending, run_grid
 from sb3_twodrl.experiments.protocol import RunSpec, load_hyperparams, parse_env_kwargs
 from sb3_twodrl.hyperparams import hyperparams_path
 
@@ -86,8 +86,9 @@ def search(argv: list[str] | None = None) -> list[dict[str, Any]]:
     grid = parse_grid(args.grid)
     base = {**load_hyperparams(hyperparams_path(args.algo), args.env), **parse_env_kwargs(args.set, "set")}
     points = [dict(zip(grid, values, strict=True)) for values in itertools.product(*grid.values())]
+    folders = [args.out / args.env / args.algo / point_name(point) for point in points]
     specs = []
-    for point in points:
+    for point, folder in zip(points, folders, strict=True):
         for seed in args.seeds:
             spec = RunSpec(
                 args.env,
@@ -97,20 +98,17 @@ def search(argv: list[str] | None = None) -> list[dict[str, Any]]:
                 args.learn_episodes,
                 args.test_episodes,
                 {**base, **point},
-                str(args.out / args.env / args.algo / point_name(point)),
+                str(folder),
                 gym_packages=args.gym_packages,
                 checkpoint_every=1,
                 save_model=False,
                 tensorboard=False,
             )
             specs.append(spec)
-    run_grid(
-        [s for s in specs if not (Path(s.out_dir) / "pairs" / f"{s.name}.csv").exists()], args.backend, args.workers
-    )
+    run_grid(pending(specs), args.backend, args.workers)
     first, last = args.score_epochs
     results = [
-        {**point, **score(collect_results(args.out / args.env / args.algo / point_name(point)), first, last)}
-        for point in points
+        {**point, **score(collect_results(folder), first, last)} for point, folder in zip(points, folders, strict=True)
     ]
     results.sort(key=lambda r: tuple(-r[k] if math.isfinite(r[k]) else math.inf for k in _ranking(args.rank_by)))
     print(table(results, list(grid), args, first, last))
