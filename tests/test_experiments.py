@@ -83,6 +83,17 @@ def test_a_shorter_runs_checkpoint_extends_to_the_longer_runs_rows(tmp_path, alg
     assert without_wall(run_pair(s)) == without_wall(longer)
 
 
+@pytest.mark.parametrize("algo", ["twoda2c", "a2c"])
+def test_a_run_with_policy_kwargs_resumes(tmp_path, algo):
+    """SB3's A2C writes its optimizer into ``policy_kwargs``; the spec must keep its own, or the
+    checkpoint's protocol would differ from the one that resumes it."""
+    hp = {**HP[algo], "policy_kwargs": {"net_arch": [8]}}
+    s = spec(tmp_path, algo, checkpoint_every=1, hyperparams=hp)
+    assert len(run_pair(replace(s, epochs=2))) == 2
+    assert s.hyperparams["policy_kwargs"] == {"net_arch": [8]}
+    assert len(run_pair(s)) == 4
+
+
 def test_checkpoint_of_another_protocol_is_refused(tmp_path):
     s = spec(tmp_path, "a2c", checkpoint_every=1)
     run_pair(s)

@@ -15,6 +15,7 @@ At the end the model is saved (``models/<algo>_seed<seed>.zip``, loadable by ``<
 
 from __future__ import annotations
 
+import copy
 import importlib
 import math
 import shutil
@@ -126,7 +127,7 @@ class EpochCallback(BaseCallback):
 
 def _new_model(spec: RunSpec) -> BaseAlgorithm:
     set_random_seed(spec.seed)
-    hp = dict(spec.hyperparams)
+    hp = copy.deepcopy(spec.hyperparams)  # SB3 fills in policy_kwargs in place (A2C's RMSprop)
     n_envs = int(hp.pop("n_envs", 1))
     policy = hp.pop("policy", "MlpPolicy")
     env = make_train_env(spec.env_id, n_envs, spec.seed, spec.vec_env, spec.env_kwargs)
