@@ -46,6 +46,16 @@ def test_run_metrics_take_the_paper_windows() -> None:
     assert (m["learned"], m["epochs_to_half"], m["reward_per_step"]) == (1.0, 3.0, pytest.approx(0.28))
 
 
+def test_a_cell_read_at_fewer_epochs_has_the_metrics_of_those_epochs(tmp_path: Path) -> None:
+    write_arm(tmp_path / "cell" / "a2c", [rows(0, [0.9, 0.9, 0.9, 0.0], shortcut_end=0.75)])
+    (full,), (short,) = (factorial.read_cells(tmp_path, n)["cell"]["a2c"] for n in (None, 20))
+    assert (full["epochs"], full["final_shortcut_share"]) == (200, pytest.approx(0.75))
+    assert (short["epochs"], short["final_shortcut_share"]) == (20, pytest.approx(0.1))
+    assert short["early_detour_share"] == pytest.approx(0.9) and short["epochs_to_half"] == 3.0
+    with pytest.raises(ValueError, match="epochs must be >= 1, got 0"):
+        factorial.read_cells(tmp_path, 0)
+
+
 def write_arm(folder: Path, frames: list[pd.DataFrame]) -> None:
     (folder / "pairs").mkdir(parents=True)
     for df in frames:

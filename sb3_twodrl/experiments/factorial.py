@@ -99,11 +99,17 @@ def cell_rows(runs: Path) -> dict[str, dict[str, Any]]:
     return cells
 
 
-def read_cells(runs: Path) -> dict[str, dict[str, list[dict[str, float]]]]:
-    """Per cell, per arm (:func:`cell_rows`), the :func:`run_metrics` of each seed."""
+def read_cells(runs: Path, epochs: int | None = None) -> dict[str, dict[str, list[dict[str, float]]]]:
+    """Per cell, per arm (:func:`cell_rows`), the :func:`run_metrics` of each seed; with ``epochs``, of
+    its rows up to that epoch (longer cells read at a shorter cell's length, amendment 12)."""
+    if epochs is not None and epochs < 1:
+        raise ValueError(f"epochs must be >= 1, got {epochs}")
     cells = {
         cell: {
-            arm: [{"seed": int(seed), **run_metrics(rows)} for seed, rows in df.groupby("seed")]
+            arm: [
+                {"seed": int(seed), **run_metrics(rows)}
+                for seed, rows in (df if epochs is None else df[df["epoch"] <= epochs]).groupby("seed")
+            ]
             for arm, df in arms.items()
         }
         for cell, arms in cell_rows(runs).items()
@@ -319,13 +325,14 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--runs", type=Path, default=Path("runs") / "factorial", help="folder of the cell folders")
     p.add_argument("--out", type=Path, help="also write table.md and runs.json here")
     p.add_argument("--figures", action="store_true", help="with --out: also the figures 3-5 of each cell")
+    p.add_argument("--epochs", type=int, help="tables of each run's rows up to this epoch (default: all)")
     return p.parse_args(argv)
 
 
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
     check_bonus_cells(args.runs)
-    cells = read_cells(args.runs)
+    cells = read_cells(args.runs, args.epochs)
     parts = [
         table(cells),
         verdicts(cells),
