@@ -87,32 +87,34 @@ def run_metrics(rows: Any) -> dict[str, float]:
     }
 
 
-def cell_rows(runs: Path) -> dict[str, dict[str, Any]]:
-    """Per cell folder of ``runs``, per arm folder with rows, its rows (:func:`collect_results`); an arm
-    whose first seed is still running is left out."""
+def cell_rows(runs: Path, epochs: int | None = None) -> dict[str, dict[str, Any]]:
+    """Per cell folder of ``runs``, per arm folder with rows, its rows (:func:`collect_results`), with
+    ``epochs`` only those up to that epoch (longer cells read at a shorter cell's length, amendment 12);
+    an arm whose first seed is still running is left out."""
+    if epochs is not None and epochs < 1:
+        raise ValueError(f"epochs must be >= 1, got {epochs}")
+
+    def read(arm: Path) -> Any:
+        rows = collect_results(arm)
+        return rows if epochs is None else rows[rows["epoch"] <= epochs]
+
     cells = {}
     for cell in sorted(p for p in runs.iterdir() if p.is_dir()):
         folders = sorted(arm for arm in cell.iterdir() if (arm / "pairs").is_dir())
-        arms = {arm.name: rows for arm in folders if len(rows := collect_results(arm))}
+        arms = {arm.name: rows for arm in folders if len(rows := read(arm))}
         if arms:
             cells[cell.name] = arms
     return cells
 
 
 def read_cells(runs: Path, epochs: int | None = None) -> dict[str, dict[str, list[dict[str, float]]]]:
-    """Per cell, per arm (:func:`cell_rows`), the :func:`run_metrics` of each seed; with ``epochs``, of
-    its rows up to that epoch (longer cells read at a shorter cell's length, amendment 12)."""
-    if epochs is not None and epochs < 1:
-        raise ValueError(f"epochs must be >= 1, got {epochs}")
+    """Per cell, per arm (:func:`cell_rows`, up to ``epochs``), the :func:`run_metrics` of each seed."""
     cells = {
         cell: {
-            arm: [
-                {"seed": int(seed), **run_metrics(rows)}
-                for seed, rows in (df if epochs is None else df[df["epoch"] <= epochs]).groupby("seed")
-            ]
+            arm: [{"seed": int(seed), **run_metrics(rows)} for seed, rows in df.groupby("seed")]
             for arm, df in arms.items()
         }
-        for cell, arms in cell_rows(runs).items()
+        for cell, arms in cell_rows(runs, epochs).items()
     }
     if not cells:
         raise ValueError(f"runs: no cell with rows under {runs}")
@@ -305,15 +307,15 @@ def bonus_claim(cells: dict[str, dict[str, list[dict[str, float]]]], arm: str = 
     )
 
 
-def figures(runs: Path, out: Path) -> list[Path]:
-    """The paper's figures 3-5 of each cell, every arm's seeds (:func:`~sb3_twodrl.experiments.plots.make_figures`):
-    ``<out>/<cell>/fig*.png``."""
+def figures(runs: Path, out: Path, epochs: int | None = None) -> list[Path]:
+    """The paper's figures 3-5 of each cell, every arm's seeds up to ``epochs``
+    (:func:`~sb3_twodrl.experiments.plots.make_figures`): ``<out>/<cell>/fig*.png``."""
     import pandas as pd
 
     from sb3_twodrl.experiments.plots import make_figures
 
     paths = []
-    for cell, arms in cell_rows(runs).items():
+    for cell, arms in cell_rows(runs, epochs).items():
         df = pd.concat(arms.values(), ignore_index=True)
         seeds = ", ".join(f"{algo} {g['seed'].nunique()}" for algo, g in df.groupby("algo"))
         paths += make_figures(df, out / cell, title=f"factorial cell {cell} (seeds: {seeds})")
@@ -325,7 +327,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--runs", type=Path, default=Path("runs") / "factorial", help="folder of the cell folders")
     p.add_argument("--out", type=Path, help="also write table.md and runs.json here")
     p.add_argument("--figures", action="store_true", help="with --out: also the figures 3-5 of each cell")
-    p.add_argument("--epochs", type=int, help="tables of each run's rows up to this epoch (default: all)")
+    p.add_argument("--epochs", type=int, help="read each run's rows up to this epoch (default: all)")
     return p.parse_args(argv)
 
 
@@ -350,5 +352,5 @@ def main(argv: list[str] | None = None) -> None:
         (args.out / "table.md").write_text(text)
         (args.out / "runs.json").write_text(json.dumps(cells, indent=1))
         if args.figures:
-            figures(args.runs, args.out)
+            figures(args.runs, args.out, args.epochs)
     print(text)
