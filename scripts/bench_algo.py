@@ -5,7 +5,7 @@
 Each pair trains on the same env id, n_envs, seed and stock arguments (the algorithms' defaults) in this
 process (DummyVecEnv, one torch thread). ``a2c``/``ppo`` pair the 2D-RL algorithm with stock SB3 (what
 a user sees); ``a2c-fast``/``ppo-fast`` with the experiments' stock arms, SB3's numbers on the same fast
-path as the 2D-RL algorithms (``sb3_twodrl.experiments.baselines``): the cost of the 2D parts alone.
+path as the 2D-RL algorithms (``twodrl_bench.baselines``): the cost of the 2D parts alone.
 Throughput is env steps per second of this process's CPU
 time, so other load on a shared machine does not skew it; runs alternate (A2C, TwoDimA2C, PPO,
 TwoDimPPO, A2C, ...) and the median of the repeats is reported.
@@ -22,7 +22,7 @@ from stable_baselines3.common.env_util import make_vec_env
 
 import envs  # noqa: F401  (registers the Nomad office ids)
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
-from sb3_twodrl.experiments.baselines import BatchedA2C, BatchedPPO
+from twodrl_bench.baselines import BatchedA2C, BatchedPPO
 
 PAIRS: dict[str, tuple[type[BaseAlgorithm], type[BaseAlgorithm]]] = {
     "a2c": (A2C, TwoDimA2C),

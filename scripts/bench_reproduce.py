@@ -2,7 +2,7 @@
 """Throughput of the paper's protocol, both arms measured side by side in one run (targets: docs/benchmarks.md).
 
 For each n_envs: one (algo, seed) run per arm (``a2c`` is SB3's A2C on the experiments' fast path,
-:mod:`sb3_twodrl.experiments.baselines`) of ``--epochs`` paper-sized epochs (K learning
+:mod:`twodrl_bench.baselines`) of ``--epochs`` paper-sized epochs (K learning
 trials, then M test trials, batched pipeline, exactly as ``reproduce.py`` runs them; no
 TensorBoard, checkpoints or models), timed by the process's CPU time (the machine is shared).
 Prints learning env-steps per CPU second (target >= 100,000), TwoDimA2C / A2C (target >= 0.9),
@@ -29,8 +29,8 @@ import gymnasium as gym  # noqa: E402
 import torch as th  # noqa: E402
 
 import envs  # noqa: E402, F401  (registers the IDs)
-from sb3_twodrl.experiments import PRESETS, RunSpec, load_hyperparams, run_pair  # noqa: E402
 from sb3_twodrl.hyperparams import hyperparams_path  # noqa: E402
+from twodrl_bench import PRESETS, RunSpec, load_hyperparams, run_pair  # noqa: E402
 
 
 def measure(env_id: str, algo: str, n_envs: int, vec_env: str, args: argparse.Namespace) -> dict[str, float]:

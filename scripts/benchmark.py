@@ -1,6 +1,6 @@
-"""Benchmark on public tasks: :mod:`sb3_twodrl.experiments.benchmark` (``sb3-twodrl-benchmark``)."""
+"""Benchmark on public tasks: :mod:`twodrl_bench.benchmark` (``sb3-twodrl-benchmark``)."""
 
-from sb3_twodrl.experiments.benchmark import main
+from twodrl_bench.benchmark import main
 
 if __name__ == "__main__":
     main()

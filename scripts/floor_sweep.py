@@ -25,7 +25,7 @@ from stable_baselines3.common.evaluation import evaluate_policy
 
 from envs.nomad.batched import make_sb3_vec_env
 from sb3_twodrl import NavigationMetricsCallback
-from sb3_twodrl.experiments.variants import VariantTwoDimA2C as TwoDimA2C  # the interest modes are variants
+from twodrl_bench.variants import VariantTwoDimA2C as TwoDimA2C  # the interest modes are variants
 
 PAPER = dict(interest="paper", preferences="raw")
 """The floor study is of eq. 9 taken literally (the default interest is relative: README, "Design notes")."""

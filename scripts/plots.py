@@ -8,7 +8,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a checkout without installing
 
-from sb3_twodrl.experiments.plots import main
+from twodrl_bench.plots import main
 
 if __name__ == "__main__":
     main()

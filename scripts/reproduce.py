@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""The paper's experiment: TwoDimA2C vs A2C (``--help``); logic in :mod:`sb3_twodrl.experiments`.
+"""The paper's experiment: TwoDimA2C vs A2C (``--help``); logic in :mod:`twodrl_bench`.
 
 python scripts/reproduce.py --env NomadOfficeMemorable-v0 --preset quick
 """
@@ -11,7 +11,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a checkout without installing
 
-from sb3_twodrl.experiments.reproduce import main
+from twodrl_bench.reproduce import main
 
 if __name__ == "__main__":
     main()

@@ -8,7 +8,7 @@ learning rate x n_steps x ent_coef, ranked by the mean test goal rate. Any other
 
 import argparse
 
-from sb3_twodrl.experiments.search import main
+from twodrl_bench.search import main
 
 
 def translate() -> list[str]:

@@ -9,8 +9,8 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from sb3_twodrl.experiments import ablation
-from sb3_twodrl.experiments.grid import collect_results
+from twodrl_bench import ablation
+from twodrl_bench.grid import collect_results
 
 BASE = {
     "a2c": {"n_envs": 4, "n_steps": 5, "gamma": 0.9, "learning_rate": 3e-3},

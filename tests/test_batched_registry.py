@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import envs  # noqa: F401  (registers the IDs)
-from sb3_twodrl.experiments.vec_env import has_batched_env, make_train_env
+from twodrl_bench.vec_env import has_batched_env, make_train_env
 
 IDS = [
     "NomadOffice-v0",

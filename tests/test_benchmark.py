@@ -1,4 +1,4 @@
-"""sb3_twodrl.experiments.benchmark and envs.public: the split wrappers against the envs' own signals, a smoke
+"""twodrl_bench.benchmark and envs.public: the split wrappers against the envs' own signals, a smoke
 run per task (both arms), the resume after a kill, bad input."""
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ pytest.importorskip("scipy")
 
 import envs  # noqa: F401  (registers the IDs)
 from sb3_twodrl.common.splitting import split_info
-from sb3_twodrl.experiments.benchmark import (
+from twodrl_bench.benchmark import (
     TASKS,
     benchmark,
     learning_curve,

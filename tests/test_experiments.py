@@ -1,4 +1,4 @@
-"""sb3_twodrl.experiments: batched == per-env rows, kill-and-resume == uninterrupted rows, the adapter, bad input."""
+"""twodrl_bench: batched == per-env rows, kill-and-resume == uninterrupted rows, the adapter, bad input."""
 
 from __future__ import annotations
 
@@ -15,9 +15,9 @@ from gymnasium.vector import AutoresetMode, SyncVectorEnv
 
 import envs  # noqa: F401  (registers the IDs)
 from sb3_twodrl import TwoDimA2C
-from sb3_twodrl.experiments import RunSpec, VectorEnvAdapter, algo_class, make_train_env, run_pair
-from sb3_twodrl.experiments import runner as runner_module
-from sb3_twodrl.experiments.runner import checkpoint_path, progress_path
+from twodrl_bench import RunSpec, VectorEnvAdapter, algo_class, make_train_env, run_pair
+from twodrl_bench import runner as runner_module
+from twodrl_bench.runner import checkpoint_path, progress_path
 
 ENV = "NomadOffice-v0"
 HP = {
@@ -157,7 +157,7 @@ def test_cartpole_falls_back_to_per_env():
 
 
 def _check_config_repeatedly(out_dir: str, seed: int) -> None:
-    from sb3_twodrl.experiments.grid import check_config
+    from twodrl_bench.grid import check_config
 
     config = {"env_id": "E", "epochs": 1, "learn_episodes": 1, "test_episodes": 1, "vec_env": "auto"}
     for _ in range(300):

@@ -8,8 +8,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from sb3_twodrl.experiments import factorial
-from sb3_twodrl.experiments.grid import COLUMNS
+from twodrl_bench import factorial
+from twodrl_bench.grid import COLUMNS
 
 
 def rows(seed: int, detour: list[float], shortcut_end: float = 1.0, reward: float = 0.28, algo: str = "a2c"):

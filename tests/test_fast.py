@@ -8,8 +8,8 @@ from stable_baselines3 import A2C, PPO
 import envs  # noqa: F401  (registers the Nomad ids)
 from sb3_twodrl.callbacks import EpisodeTracker
 from sb3_twodrl.common.infos import BatchInfos
-from sb3_twodrl.experiments.baselines import BatchedA2C, BatchedPPO
-from sb3_twodrl.experiments.vec_env import make_train_env
+from twodrl_bench.baselines import BatchedA2C, BatchedPPO
+from twodrl_bench.vec_env import make_train_env
 
 PPO_ARGS = dict(n_steps=64, batch_size=32, n_epochs=2)
 

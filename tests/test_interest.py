@@ -10,8 +10,8 @@ from gymnasium.wrappers import TimeLimit
 from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_twodrl import TwoDimA2C
-from sb3_twodrl.experiments.variants import INTEREST_MODES, VariantTwoDimA2C, scored_actions
 from tests.toy_envs import LatticeCorridor
+from twodrl_bench.variants import INTEREST_MODES, VariantTwoDimA2C, scored_actions
 
 WEST = 3  # LatticeCorridor's move into the wall at the start
 

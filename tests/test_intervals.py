@@ -1,4 +1,4 @@
-"""sb3_twodrl.experiments.intervals: the intervals contain their estimate and agree with scipy."""
+"""twodrl_bench.intervals: the intervals contain their estimate and agree with scipy."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from sb3_twodrl.experiments.intervals import mean_ci, welch_ci, wilson
+from twodrl_bench.intervals import mean_ci, welch_ci, wilson
 
 pytest.importorskip("scipy")
 

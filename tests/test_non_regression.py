@@ -1,4 +1,4 @@
-"""sb3_twodrl.experiments.non_regression: rl-zoo3 training, frozen VecNormalize evaluation, table, resume."""
+"""twodrl_bench.non_regression: rl-zoo3 training, frozen VecNormalize evaluation, table, resume."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ pytest.importorskip("rl_zoo3")
 pytest.importorskip("scipy")
 
 from sb3_twodrl import TwoDimA2C
-from sb3_twodrl.experiments.non_regression import check_settings, non_regression, parse_args, settings
+from twodrl_bench.non_regression import check_settings, non_regression, parse_args, settings
 
 
 @pytest.mark.slow  # spawns rl-zoo3 training processes (about 40 s); CI's wheel check runs the command

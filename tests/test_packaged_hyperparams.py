@@ -9,8 +9,8 @@ import pytest
 
 import envs  # noqa: F401  (registers the Nomad office ids)
 import sb3_twodrl
-from sb3_twodrl.experiments import load_hyperparams, reproduce
 from sb3_twodrl.hyperparams import PACKAGED, hyperparams_path, read_entry
+from twodrl_bench import load_hyperparams, reproduce
 
 
 @pytest.mark.parametrize("algo", PACKAGED)

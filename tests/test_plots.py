@@ -3,7 +3,7 @@
 import numpy as np
 import pandas as pd
 
-from sb3_twodrl.experiments.plots import window_table
+from twodrl_bench.plots import window_table
 
 
 def rows(epochs: int, seeds: int = 2) -> pd.DataFrame:

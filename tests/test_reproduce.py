@@ -10,8 +10,8 @@ import pytest
 pytest.importorskip("matplotlib")
 pytest.importorskip("yaml")
 
-from sb3_twodrl.experiments import COLUMNS, PRESETS, algo_class, reproduce
 from sb3_twodrl.hyperparams import hyperparams_path, read_entry
+from twodrl_bench import COLUMNS, PRESETS, algo_class, reproduce
 
 ALGOS = ["twoda2c", "a2c"]
 

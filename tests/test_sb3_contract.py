@@ -25,7 +25,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
 from sb3_twodrl.common.policies import TEMPERATURE_ARGUMENTS, TwoDimPolicyMixin
-from sb3_twodrl.experiments.variants import VariantTwoDimA2C, VariantTwoDimPPO
+from twodrl_bench.variants import VariantTwoDimA2C, VariantTwoDimPPO
 
 ALGOS = (TwoDimA2C, TwoDimPPO)
 

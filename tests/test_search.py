@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from sb3_twodrl.experiments import search
+from twodrl_bench import search
 
 
 def test_grid_items_become_lists_of_literals() -> None:

@@ -22,8 +22,8 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 
 import envs  # noqa: F401  (registers the IDs)
 from envs.nomad.office import GOAL_REWARD
-from sb3_twodrl.experiments.variants import VariantTwoDimA2C
 from tests.tabular_oracle import TabularActorCritic
+from twodrl_bench.variants import VariantTwoDimA2C
 
 N_STEPS = 1000
 TOLERANCE = 1e-6

@@ -1,4 +1,4 @@
-"""sb3_twodrl.experiments.transfer: per-seed outcomes, the paper's 10 trials, sensors-only policies."""
+"""twodrl_bench.transfer: per-seed outcomes, the paper's 10 trials, sensors-only policies."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import gymnasium as gym
 import pytest
 
 import envs  # noqa: F401  (registers the IDs)
-from sb3_twodrl.experiments.protocol import parse_env_kwargs
-from sb3_twodrl.experiments.transfer import parse_args, table, transfer
+from twodrl_bench.protocol import parse_env_kwargs
+from twodrl_bench.transfer import parse_args, table, transfer
 
 
 def test_sensors_only_transfer_counts_every_trial(tmp_path) -> None:

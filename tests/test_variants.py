@@ -1,4 +1,4 @@
-"""The ablation's variants (``sb3_twodrl.experiments.variants``): every arm builds and runs, and its
+"""The ablation's variants (``twodrl_bench.variants``): every arm builds and runs, and its
 committed rows come back from its command (``docs/ablation.md``)."""
 
 from pathlib import Path
@@ -10,11 +10,11 @@ from gymnasium.wrappers import TimeLimit
 from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
-from sb3_twodrl.experiments import ablation
-from sb3_twodrl.experiments.algos import algo_class
-from sb3_twodrl.experiments.grid import collect_results
-from sb3_twodrl.experiments.variants import VariantTwoDimA2C, VariantTwoDimPPO
 from tests.toy_envs import LatticeCorridor
+from twodrl_bench import ablation
+from twodrl_bench.algos import algo_class
+from twodrl_bench.grid import collect_results
+from twodrl_bench.variants import VariantTwoDimA2C, VariantTwoDimPPO
 
 FIGURES = Path(__file__).resolve().parents[1] / "results" / "ablation"
 BASE = {"a2c": {"n_envs": 2, "n_steps": 8}, "twoda2c": {"n_envs": 2, "n_steps": 8, "punishment_gamma": 0.1}}

@@ -20,7 +20,7 @@ from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.evaluation import evaluate_policy
 
-from sb3_twodrl.experiments.variants import VariantTwoDimA2C as TwoDimA2C  # the interest modes are variants
+from twodrl_bench.variants import VariantTwoDimA2C as TwoDimA2C  # the interest modes are variants
 
 
 class InverseTemperatures(BaseCallback):

@@ -15,8 +15,8 @@ import torch as th
 from gymnasium.wrappers import TimeLimit
 from stable_baselines3.common.env_util import make_vec_env
 
-from sb3_twodrl.experiments.variants import VariantTwoDimA2C as TwoDimA2C  # the interest modes are variants
 from tests.toy_envs import LatticeCorridor
+from twodrl_bench.variants import VariantTwoDimA2C as TwoDimA2C  # the interest modes are variants
 
 SETTINGS = {
     "default (eq. 9, raw)": {},

@@ -15,7 +15,7 @@ surprise, whatever the size of the rewards or how settled the critics are; clamp
 
 Eq. 9 taken literally (``T = delta+`` of the transition into the state), the relative interest of
 that transition and preferences of bounded spread are ablation variants:
-:mod:`sb3_twodrl.experiments.variants`.
+:mod:`twodrl_bench.variants`.
 """
 
 import numpy as np

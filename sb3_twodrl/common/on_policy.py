@@ -138,7 +138,7 @@ class TwoDimOnPolicyMixin(BatchInfosMixin):
             raise ValueError(
                 f"this file was saved by an older sb3-twodrl (no save format, this version writes {SAVE_FORMAT}) and "
                 f"cannot be loaded by {type(self).__name__}: the arguments interest, preferences, preference_bound "
-                "and actor_update left the algorithms (ablation variants: sb3_twodrl.experiments.variants), the "
+                "and actor_update left the algorithms (ablation variants: twodrl_bench.variants), the "
                 "temperature settings moved into the policy and the punishment critic starts at 0; retrain, or "
                 "load it with the version that saved it"
             )
@@ -146,7 +146,7 @@ class TwoDimOnPolicyMixin(BatchInfosMixin):
             raise ValueError(
                 f"this file was saved by an ablation variant (actor_update={vars(self)['actor_update']!r}), whose "
                 f"training {type(self).__name__} would not reproduce: load it with "
-                f"sb3_twodrl.experiments.variants.Variant{type(self).__name__}"
+                f"twodrl_bench.variants.Variant{type(self).__name__}"
             )
         if self.rollout_buffer_class is None:
             is_dict = isinstance(self.observation_space, spaces.Dict)

@@ -11,12 +11,12 @@
 Nothing here imports an env package: envs are named by ID, their packages by ``gym_packages``.
 """
 
-from sb3_twodrl.experiments.algos import ALGOS, algo_class
-from sb3_twodrl.experiments.grid import collect_results, run_grid
-from sb3_twodrl.experiments.protocol import COLUMNS, METRICS, PRESETS, RunSpec, load_hyperparams
-from sb3_twodrl.experiments.runner import run_pair
-from sb3_twodrl.experiments.trials import run_test_trials
-from sb3_twodrl.experiments.vec_env import VectorEnvAdapter, make_test_env, make_train_env
+from twodrl_bench.algos import ALGOS, algo_class
+from twodrl_bench.grid import collect_results, run_grid
+from twodrl_bench.protocol import COLUMNS, METRICS, PRESETS, RunSpec, load_hyperparams
+from twodrl_bench.runner import run_pair
+from twodrl_bench.trials import run_test_trials
+from twodrl_bench.vec_env import VectorEnvAdapter, make_test_env, make_train_env
 
 __all__ = [
     "ALGOS",

@@ -1,11 +1,11 @@
 """What each part of 2D-RL contributes, at the paper's protocol: ``sb3-twodrl-ablation``.
 
-Every arm is a grid of (arm, seed) runs of :func:`~sb3_twodrl.experiments.runner.run_pair`
+Every arm is a grid of (arm, seed) runs of :func:`~twodrl_bench.runner.run_pair`
 (epochs of K learning trials and M test trials, batched envs, resume), in ``<out>/<arm>/``. All arms
 share the protocol's settings (the packaged ``a2c.yml`` and ``twoda2c.yml``, whose Nomad entries
 differ only in the 2D-RL arguments; PPO's arms ``ppo.yml`` and ``twodppo.yml``); an arm changes only
 these (every 2D arm but ``twoda2c`` and ``twodppo`` runs
-:class:`~sb3_twodrl.experiments.variants.VariantTwoDimA2C`, where its modes live):
+:class:`~twodrl_bench.variants.VariantTwoDimA2C`, where its modes live):
 
 1. ``a2c``: SB3's A2C.
 2. ``a2c_fixed``: A2C at a fixed temperature: TwoDimA2C with ``reward_split="none"`` (the whole
@@ -16,7 +16,7 @@ these (every 2D arm but ``twoda2c`` and ``twodppo`` runs
    with the actor update ``"log_prob"`` (the default before the compensated score), pinned (arms
    2-5 and the relative ones too).
 5. ``relative_bounded``, ``relative_raw``, ``learned_bounded``: the options of
-   :mod:`sb3_twodrl.experiments.variants`; ``relative_bound25``: the relative interest on preferences
+   :mod:`twodrl_bench.variants`; ``relative_bound25``: the relative interest on preferences
    bounded to an sd of 2.5 with the floor at 1 (exploratory, derived in ``docs/ablation.md``);
    ``paper_eq10`` and ``bound25_eq10``: ``paper`` and ``relative_bound25`` with eq. 10 taken
    literally (``actor_update="preference"``; exploratory); ``paper_tempered``: ``paper`` with the
@@ -54,16 +54,16 @@ from typing import Any
 
 import numpy as np
 
-from sb3_twodrl.experiments.grid import check_config, collect_results, pending, run_grid
-from sb3_twodrl.experiments.intervals import mean_ci, wilson
-from sb3_twodrl.experiments.protocol import PRESETS, RunSpec, load_hyperparams, parse_env_kwargs
 from sb3_twodrl.hyperparams import hyperparams_path
+from twodrl_bench.grid import check_config, collect_results, pending, run_grid
+from twodrl_bench.intervals import mean_ci, wilson
+from twodrl_bench.protocol import PRESETS, RunSpec, load_hyperparams, parse_env_kwargs
 
 _LOG_PROB_SCORE = {"actor_update": "log_prob"}
 """The actor update every arm but ``paper_tempered``, ``paper_compensated`` and the eq. 10 arms ran with
 (the default then): pinned, so that the arms keep their rows whatever the default becomes."""
 _VARIANT = "twoda2c_variant"
-"""Every 2D arm runs :class:`~sb3_twodrl.experiments.variants.VariantTwoDimA2C` (hyperparameters of
+"""Every 2D arm runs :class:`~twodrl_bench.variants.VariantTwoDimA2C` (hyperparameters of
 ``twoda2c.yml``): the arms' interest modes, preferences and actor updates are variants, and they ran
 with ``V_P``'s orthogonal initialisation, which the variants keep."""
 _BASE_ALGO = {_VARIANT: "twoda2c"}

@@ -25,12 +25,12 @@ from typing import Any
 import torch as th
 from stable_baselines3.common.base_class import BaseAlgorithm
 
-from sb3_twodrl.experiments.algos import ALGOS, algo_class
-from sb3_twodrl.experiments.intervals import mean_ci, wilson
-from sb3_twodrl.experiments.protocol import parse_env_kwargs
-from sb3_twodrl.experiments.runner import model_path
-from sb3_twodrl.experiments.trials import tally, trial_outcomes
-from sb3_twodrl.experiments.vec_env import make_test_env, make_train_env
+from twodrl_bench.algos import ALGOS, algo_class
+from twodrl_bench.intervals import mean_ci, wilson
+from twodrl_bench.protocol import parse_env_kwargs
+from twodrl_bench.runner import model_path
+from twodrl_bench.trials import tally, trial_outcomes
+from twodrl_bench.vec_env import make_test_env, make_train_env
 
 TRAIN_ENVS = ("NomadOffice-v0", "NomadOfficeMemorable-v0")
 PAPER_TRIALS = 10

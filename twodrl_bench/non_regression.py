@@ -20,8 +20,8 @@ import os
 from pathlib import Path
 from typing import Any
 
-from sb3_twodrl.experiments.intervals import mean_ci, welch_ci
 from sb3_twodrl.hyperparams import hyperparams_path, read_entry
+from twodrl_bench.intervals import mean_ci, welch_ci
 
 EVAL_SEED = 10**6
 """Seed of the evaluation env: apart from the training seeds."""
@@ -49,8 +49,8 @@ def train_and_evaluate(
     from stable_baselines3.common.evaluation import evaluate_policy
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from sb3_twodrl.experiments.algos import algo_class
     from sb3_twodrl.zoo import prepare_zoo_argv, run_zoo_entry
+    from twodrl_bench.algos import algo_class
 
     th.set_num_threads(1)
     log = Path(out) / f"{algo}_seed{seed}"

@@ -18,9 +18,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from sb3_twodrl.experiments.checkpoint import atomic_write_bytes
-from sb3_twodrl.experiments.protocol import COLUMNS, RunSpec
-from sb3_twodrl.experiments.runner import Row, checkpoint_path, progress_path, run_pair
+from twodrl_bench.checkpoint import atomic_write_bytes
+from twodrl_bench.protocol import COLUMNS, RunSpec
+from twodrl_bench.runner import Row, checkpoint_path, progress_path, run_pair
 
 BACKENDS = ("process", "ray", "serial")
 

@@ -1,6 +1,6 @@
 """The paper's experiment (section 3.4, figures 3-5) from the command line: ``sb3-twodrl-reproduce``.
 
-Runs every (algo, seed) of a protocol preset through :func:`~sb3_twodrl.experiments.grid.run_grid`
+Runs every (algo, seed) of a protocol preset through :func:`~twodrl_bench.grid.run_grid`
 and writes under ``--out`` (default ``runs/reproduce/<env>``): ``results.csv`` (one row per algo,
 seed, epoch), ``pairs/`` (one CSV per finished run), ``checkpoints/`` (running pairs),
 ``models/<algo>_seed<seed>.zip`` (final models, ``<Algo>.load``), ``tb/<algo>_seed<seed>_0``
@@ -22,11 +22,11 @@ import importlib
 import os
 from pathlib import Path
 
-from sb3_twodrl.experiments.algos import ALGOS
-from sb3_twodrl.experiments.grid import BACKENDS, check_config, collect_results, pending, run_grid
-from sb3_twodrl.experiments.protocol import PRESETS, RunSpec, load_hyperparams, parse_env_kwargs
-from sb3_twodrl.experiments.vec_env import VEC_ENV_MODES
 from sb3_twodrl.hyperparams import hyperparams_path
+from twodrl_bench.algos import ALGOS
+from twodrl_bench.grid import BACKENDS, check_config, collect_results, pending, run_grid
+from twodrl_bench.protocol import PRESETS, RunSpec, load_hyperparams, parse_env_kwargs
+from twodrl_bench.vec_env import VEC_ENV_MODES
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -125,7 +125,7 @@ def reproduce(argv: list[str] | None = None) -> Path:
     df = collect_results(out)
     df.to_csv(out / "results.csv", index=False)
     if not args.no_plots:
-        from sb3_twodrl.experiments.plots import make_figures, summary_table, window_table
+        from twodrl_bench.plots import make_figures, summary_table, window_table
 
         k, m = config["learn_episodes"], config["test_episodes"]
         make_figures(df, out, title=f"{args.env}: K={k}, M={m}, {df['seed'].nunique()} seeds")

@@ -33,9 +33,9 @@ from typing import Any
 
 import numpy as np
 
-from sb3_twodrl.experiments.checkpoint import atomic_write_bytes
-from sb3_twodrl.experiments.intervals import mean_ci, welch_ci, wilson
-from sb3_twodrl.experiments.non_regression import EVAL_SEED, open_record
+from twodrl_bench.checkpoint import atomic_write_bytes
+from twodrl_bench.intervals import mean_ci, welch_ci, wilson
+from twodrl_bench.non_regression import EVAL_SEED, open_record
 
 Row = dict[str, Any]
 STOCK = {"twoda2c": "a2c", "twodppo": "ppo"}
@@ -220,8 +220,8 @@ def train_and_evaluate(task_name: str, arm: str, seed: int, out: str, episodes: 
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from sb3_twodrl.experiments.algos import algo_class
     from sb3_twodrl.zoo import prepare_zoo_argv, run_zoo_entry
+    from twodrl_bench.algos import algo_class
 
     th.set_num_threads(1)
     clock = time.perf_counter()

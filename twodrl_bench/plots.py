@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from sb3_twodrl.experiments.intervals import mean_ci
+from twodrl_bench.intervals import mean_ci
 
 STYLE = {  # the paper: proposed method solid, conventional actor-critic dotted
     "twoda2c": {"label": "2D-RL (TwoDimA2C)", "linestyle": "-", "color": "tab:red"},

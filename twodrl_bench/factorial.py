@@ -22,9 +22,9 @@ from typing import Any
 
 import numpy as np
 
-from sb3_twodrl.experiments.ablation import interval, summarize_run
-from sb3_twodrl.experiments.grid import collect_results
-from sb3_twodrl.experiments.intervals import welch_ci, wilson
+from twodrl_bench.ablation import interval, summarize_run
+from twodrl_bench.grid import collect_results
+from twodrl_bench.intervals import welch_ci, wilson
 
 EARLY_EPOCHS = 150
 """The paper's window for its actor-critic's detour (section 3.4): epochs 1-150."""
@@ -309,10 +309,10 @@ def bonus_claim(cells: dict[str, dict[str, list[dict[str, float]]]], arm: str = 
 
 def figures(runs: Path, out: Path, epochs: int | None = None) -> list[Path]:
     """The paper's figures 3-5 of each cell, every arm's seeds up to ``epochs``
-    (:func:`~sb3_twodrl.experiments.plots.make_figures`): ``<out>/<cell>/fig*.png``."""
+    (:func:`~twodrl_bench.plots.make_figures`): ``<out>/<cell>/fig*.png``."""
     import pandas as pd
 
-    from sb3_twodrl.experiments.plots import make_figures
+    from twodrl_bench.plots import make_figures
 
     paths = []
     for cell, arms in cell_rows(runs, epochs).items():

@@ -18,9 +18,9 @@ from typing import Any
 
 import numpy as np
 
-from sb3_twodrl.experiments.grid import collect_results, pending, run_grid
-from sb3_twodrl.experiments.protocol import RunSpec, load_hyperparams, parse_env_kwargs
 from sb3_twodrl.hyperparams import hyperparams_path
+from twodrl_bench.grid import collect_results, pending, run_grid
+from twodrl_bench.protocol import RunSpec, load_hyperparams, parse_env_kwargs
 
 SCORES = ("goal_rate", "reward_per_step")
 
@@ -59,7 +59,7 @@ def score(rows: Any, first: int, last: int) -> dict[str, Any]:
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--env", default="NomadOffice-v0")
-    p.add_argument("--algo", default="a2c", help="the baseline, a name of sb3_twodrl.experiments.ALGOS")
+    p.add_argument("--algo", default="a2c", help="the baseline, a name of twodrl_bench.ALGOS")
     p.add_argument("--grid", nargs="+", required=True, metavar="KEY:V1,V2", help="the settings searched")
     p.add_argument("--set", nargs="*", default=[], metavar="KEY:VALUE", help="settings changed at every point")
     p.add_argument("--epochs", type=int, default=20)

@@ -31,11 +31,11 @@ from stable_baselines3.common.utils import set_random_seed
 from stable_baselines3.common.vec_env import VecEnv
 
 from sb3_twodrl.callbacks import NavigationMetricsCallback
-from sb3_twodrl.experiments.algos import algo_class
-from sb3_twodrl.experiments.checkpoint import load_checkpoint, save_checkpoint, set_rng_state
-from sb3_twodrl.experiments.protocol import LEARNING, METRICS, RunSpec, trial_seed
-from sb3_twodrl.experiments.trials import run_test_trials
-from sb3_twodrl.experiments.vec_env import make_test_env, make_train_env
+from twodrl_bench.algos import algo_class
+from twodrl_bench.checkpoint import load_checkpoint, save_checkpoint, set_rng_state
+from twodrl_bench.protocol import LEARNING, METRICS, RunSpec, trial_seed
+from twodrl_bench.trials import run_test_trials
+from twodrl_bench.vec_env import make_test_env, make_train_env
 
 Row = dict[str, Any]
 

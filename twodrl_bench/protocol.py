@@ -31,7 +31,7 @@ _NOT_SETTINGS = ("policy", "env", "verbose", "seed", "device", "tensorboard_log"
 def class_defaults(algo: str, hyperparams: dict[str, Any]) -> dict[str, str]:
     """The constructor defaults of ``algo``'s class that ``hyperparams`` leave in force, as ``repr``:
     a run resumed after a default changed (a new release) is then refused, not mixed."""
-    from sb3_twodrl.experiments.algos import algo_class
+    from twodrl_bench.algos import algo_class
 
     parameters = inspect.signature(algo_class(algo).__init__).parameters.values()
     return {
@@ -46,7 +46,7 @@ class RunSpec:
     """Everything one (algo, seed) run needs; plain data, so it travels to a worker process or a Ray task.
 
     ``vec_env``: ``"auto"`` (the registry's batched env where there is one), ``"batched"`` or
-    ``"dummy"`` (SB3's ``DummyVecEnv``); see :mod:`sb3_twodrl.experiments.vec_env`.
+    ``"dummy"`` (SB3's ``DummyVecEnv``); see :mod:`twodrl_bench.vec_env`.
     ``checkpoint_every``: epochs between checkpoints (0: none). ``env_kwargs``: passed to the env's
     constructor for learning and test trials alike (e.g. ``{"observe_odometry": False}``).
     """
