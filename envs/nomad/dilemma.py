@@ -168,6 +168,8 @@ def measure(core: OfficeCore, time_limit: int, eps_grid: np.ndarray | None = Non
     """The figures of properties P1-P5 (docs/nomad.md) for one office, episodes truncated after ``time_limit`` steps."""
     if isinstance(time_limit, bool) or not isinstance(time_limit, int) or time_limit < 1:
         raise ValueError(f"time_limit must be a positive int, got {time_limit!r}")
+    if not core.office.has_routes:
+        raise ValueError(f"map {core.office.source} has no route regions (shortcut, detour): it poses no dilemma")
     eps_grid = np.round(np.arange(0.0, 0.51, 0.01), 2) if eps_grid is None else eps_grid
     out: dict[str, float] = {}
     for route in ROUTE_CODES:

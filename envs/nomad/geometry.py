@@ -20,8 +20,9 @@ STEP_CM = 10.0
 class OfficeMap:
     """A validated office: wall segments ``(n, 4)`` as ``x0, y0, x1, y1`` and named rectangles.
 
-    ``regions`` maps ``goal``, ``shortcut`` and ``detour`` to ``(xmin, ymin, xmax, ymax)``: the
-    goal is reached, and a route is committed to, when the robot's centre enters the rectangle.
+    ``regions`` maps ``goal`` and, on a map with a route choice, ``shortcut`` and ``detour`` to
+    ``(xmin, ymin, xmax, ymax)``: the goal is reached, and a route is committed to, when the robot's
+    centre enters the rectangle.
     """
 
     name: str
@@ -35,8 +36,15 @@ class OfficeMap:
         """True where a point ``(..., 2)`` lies inside the map's bounding box."""
         return _in_rect(self.bounds, xy)
 
+    @property
+    def has_routes(self) -> bool:
+        """Whether the map labels routes (``shortcut`` and ``detour`` regions); without them no route is reported."""
+        return "shortcut" in self.regions
+
     def in_region(self, name: str, xy: np.ndarray) -> np.ndarray:
-        """True where a point ``(..., 2)`` lies in the named rectangle."""
+        """True where a point ``(..., 2)`` lies in the named rectangle (nowhere for a region the map lacks)."""
+        if name not in self.regions:
+            return np.zeros(np.shape(xy)[:-1], dtype=bool)
         return _in_rect(self.regions[name], xy)
 
 
@@ -46,7 +54,11 @@ def _in_rect(rect: tuple[float, float, float, float], xy: np.ndarray) -> np.ndar
 
 
 MAPS_DIR = Path(__file__).with_name("maps")
-SHIPPED_MAPS = ("office", "open")  # map="office" (the default) or map="open" (no dilemma)
+SHIPPED_MAPS = ("office", "open", "corridor")
+"""Built-in maps by name: ``office`` (the default, the dilemma), ``open`` (no dilemma), ``corridor`` (one route)."""
+ROUTE_REGIONS = ("shortcut", "detour")
+MAX_LATTICE_POINTS = 1_000_000
+"""Largest lattice a map may span (bounds / 10 cm in x times in y): 100 m x 100 m."""
 
 
 def default_map_path() -> Path:
@@ -67,6 +79,9 @@ def _number_list(value: object, length: int, what: str, source: str) -> tuple[fl
     return out
 
 
+_MAP_CHOICES = f"a built-in map name ({', '.join(SHIPPED_MAPS)}) or the path of a map JSON file"
+
+
 def map_source(path: str | Path | None = None) -> str:
     """The resolved path of a map file; ``None`` is the shipped office, a name in ``SHIPPED_MAPS`` a shipped map."""
     if path is not None and not isinstance(path, str | Path):
@@ -75,6 +90,8 @@ def map_source(path: str | Path | None = None) -> str:
         path = default_map_path()
     elif isinstance(path, str) and path in SHIPPED_MAPS:
         path = MAPS_DIR / f"{path}.json"
+    elif str(path).strip() == "":
+        raise ValueError(f"map must be {_MAP_CHOICES}, got {path!r}")
     return str(Path(path).resolve())
 
 
@@ -85,10 +102,11 @@ def load_map(path: str | Path | None = None) -> OfficeMap:
     Raises ``ValueError`` naming the file and the offending entry.
     """
     source = map_source(path)
+    if not Path(source).is_file():
+        what = "is a directory" if Path(source).is_dir() else "does not exist"
+        raise ValueError(f"map file {source} {what} (map must be {_MAP_CHOICES})")
     try:
         data = json.loads(Path(source).read_text())
-    except FileNotFoundError as err:
-        raise ValueError(f"map file {source} does not exist") from err
     except json.JSONDecodeError as err:
         raise ValueError(f"map file {source} is not valid JSON: {err}") from err
     if not isinstance(data, dict):
@@ -119,10 +137,17 @@ def load_map(path: str | Path | None = None) -> OfficeMap:
     start = _number_list(data["start"], 2, "start", source)
     if not isinstance(data["regions"], dict):
         raise ValueError(f"map file {source}: regions must be an object, got {data['regions']!r}")
+    if "goal" not in data["regions"]:
+        raise ValueError(f"map file {source}: regions.goal is missing")
+    given = [name for name in ROUTE_REGIONS if name in data["regions"]]
+    if len(given) == 1:
+        other = ROUTE_REGIONS[1 - ROUTE_REGIONS.index(given[0])]
+        raise ValueError(
+            f"map file {source}: regions.{given[0]} needs regions.{other} (route regions come as a pair), "
+            f"regions.{other} is missing"
+        )
     regions: dict[str, tuple[float, float, float, float]] = {}
-    for name in ("goal", "shortcut", "detour"):
-        if name not in data["regions"]:
-            raise ValueError(f"map file {source}: regions.{name} is missing")
+    for name in ("goal", *given):
         rect = _number_list(data["regions"][name], 4, f"regions.{name}", source)
         if not (rect[0] <= rect[2] and rect[1] <= rect[3]):
             raise ValueError(f"map file {source}: regions.{name} must be [xmin, ymin, xmax, ymax], got {rect}")
@@ -131,6 +156,12 @@ def load_map(path: str | Path | None = None) -> OfficeMap:
     start_xy = np.array(start)
     if not office.inside_bounds(start_xy) or clearance(start_xy[None], walls)[0] <= ROBOT_RADIUS_CM:
         raise ValueError(f"map file {source}: start {start} is outside the map or the robot there touches a wall")
+    points = np.prod([np.floor((hi - lo) / STEP_CM) + 1 for lo, hi in ((bounds[0], bounds[2]), (bounds[1], bounds[3]))])
+    if points > MAX_LATTICE_POINTS:
+        raise ValueError(
+            f"map file {source}: bounds {bounds} span {points:.3g} lattice points of {STEP_CM:.0f} cm, "
+            f"more than {MAX_LATTICE_POINTS:,} (are the units cm?)"
+        )
     return office
 
 
@@ -285,3 +316,32 @@ def build_lattice(office: OfficeMap) -> Lattice:
         reachable[nxt] = True
         frontier = nxt.tolist()
     return Lattice(cells, moves, reachable, origin, grid.shape, grid)
+
+
+def check_goal_reachable(office: OfficeMap, lattice: Lattice) -> None:
+    """Raise ``ValueError`` unless a goal cell is reachable from the start on ``lattice``.
+
+    Reachable means by the env's own moves: 10 cm N/E/S/W steps whose swept robot disc clears every
+    wall (:func:`build_lattice`). The message says how many free cells the start reaches and where.
+    """
+    start, goal = _xy(office.start), list(office.regions["goal"])
+    in_goal = office.in_region("goal", lattice.cells)
+    reached = int(lattice.reachable.sum())
+    if not in_goal.any():
+        raise ValueError(
+            f"map file {office.source}: the goal region {goal} holds no free lattice cell: the robot "
+            f"(a {ROBOT_RADIUS_CM:.0f} cm radius disc on the {STEP_CM:.0f} cm lattice through the start {start}) "
+            "cannot stand in it; widen it or move its walls"
+        )
+    if not (in_goal & lattice.reachable).any():
+        raise ValueError(
+            f"map file {office.source}: the goal {goal} cannot be reached from the start {start}: "
+            f"{reached} of {len(lattice.cells)} free lattice cells are reachable, none in the goal; the goal's "
+            f"{int(in_goal.sum())} free cells (e.g. {_xy(lattice.cells[np.argmax(in_goal)])}) are walled off for "
+            f"a {ROBOT_RADIUS_CM:.0f} cm radius robot moving {STEP_CM:.0f} cm N/E/S/W; widen the passages "
+            f"(a robot needs more than {2 * ROBOT_RADIUS_CM:.0f} cm)"
+        )
+
+
+def _xy(xy: tuple[float, float] | np.ndarray) -> str:
+    return f"({float(xy[0]):g}, {float(xy[1]):g})"

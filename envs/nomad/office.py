@@ -18,6 +18,7 @@ from envs.nomad.geometry import (
     Lattice,
     OfficeMap,
     build_lattice,
+    check_goal_reachable,
     clearance,
     load_map,
     map_source,
@@ -66,6 +67,7 @@ def route_code_at(office: OfficeMap, xy: np.ndarray) -> np.ndarray:
 def _core(source: str, mtime_ns: int) -> OfficeCore:
     office = load_map(source)
     lattice = build_lattice(office)
+    check_goal_reachable(office, lattice)
     ranges = sensors.exact_ranges(office, lattice.cells)
     return OfficeCore(
         office,
@@ -79,7 +81,12 @@ def _core(source: str, mtime_ns: int) -> OfficeCore:
 
 
 def office_core(map_path: str | Path | None = None) -> OfficeCore:
-    """The (cached) :class:`OfficeCore` of a map file; ``None`` is the shipped office."""
+    """The (cached) :class:`OfficeCore` of a map file; ``None`` is the shipped office.
+
+    Every env loads its map here: the file is validated (:func:`~envs.nomad.geometry.load_map`) and
+    its goal must be reachable from the start on the lattice
+    (:func:`~envs.nomad.geometry.check_goal_reachable`), else ``ValueError``.
+    """
     source = Path(map_source(map_path))
     # A missing file gets its error from load_map, uncached
     return _core(str(source), source.stat().st_mtime_ns if source.exists() else -1)
@@ -162,7 +169,8 @@ class NomadOfficeEnv(gym.Env):
     collision leaves the robot where it was and ends the episode, as does the goal.
     ``info["route"]`` is the route label region the robot's centre entered last (``"shortcut"``/
     ``"detour"``, ``None`` before either); every path from start to goal passes one of them, so at
-    the goal it is the route the robot took (the map places them where a robot is committed).
+    the goal it is the route the robot took (the map places them where a robot is committed). A map
+    without route regions (no route choice, e.g. ``map="corridor"``) has no ``info["route"]``.
 
     Ideal model (``NomadOffice-v0``): on the lattice, readings and move outcomes are table
     look-ups; ``sensor_noise`` adds per-step noise. Realistic model (``NomadOfficeReal-v0``):
@@ -344,13 +352,16 @@ class NomadOfficeEnv(gym.Env):
         return False, int(route_code_at(office, target)), bool(office.in_region("goal", target))
 
     def _info(self, goal: bool, punishment: float, collided: bool = False) -> dict[str, Any]:
-        return {
+        info = {
             "punishment": punishment,
             "collision": collided,
             "route": ROUTES[self._route],
             "position_cm": (float(self._pos[0]), float(self._pos[1])),
             "is_success": goal,
         }
+        if not self.core.office.has_routes:
+            del info["route"]
+        return info
 
     def render(self) -> np.ndarray | None:
         """Top-down RGB frame: walls, start, goal, trajectory, robot and its sonar cones."""

@@ -30,7 +30,7 @@ class OfficeRenderer:
 
     def _draw_background(self) -> np.ndarray:
         image = np.full((self.height, self.width, 3), _WHITE, dtype=np.uint8)
-        for name, colour in _REGION_COLOURS.items():
+        for name, colour in _REGION_COLOURS.items():  # a region the map lacks is nowhere
             image[self.office.in_region(name, self._xy)] = colour
         for wall in self.office.walls:
             self._segment(image, wall[:2], wall[2:], _WALL, width_cm=3.0)
