@@ -90,6 +90,7 @@ class BatchedNomadOfficeMemorable(BatchedNomadOffice):
         *,
         database: str | Path | SensorDatabase | None = None,
         observe_odometry: bool = True,
+        render_mode: str | None = None,
         max_episode_steps: int = MAX_EPISODE_STEPS,
         observation: str = "sensors",
     ) -> None:
@@ -97,6 +98,7 @@ class BatchedNomadOfficeMemorable(BatchedNomadOffice):
             num_envs,
             map,
             observe_odometry=observe_odometry,
+            render_mode=render_mode,
             max_episode_steps=max_episode_steps,
             observation=observation,
         )
