@@ -21,7 +21,7 @@ import numpy as np
 
 from envs.memorable.recording import drive_and_record
 from envs.nomad import sensors
-from envs.nomad.geometry import ROBOT_RADIUS_CM, STEP_CM, OfficeMap, map_source
+from envs.nomad.geometry import ROBOT_RADIUS_CM, SHIPPED_MAPS, STEP_CM, OfficeMap, map_source
 from envs.nomad.office import OfficeCore, office_core
 from envs.nomad.realistic import RealisticModel
 from envs.nomad.sensors import HIGH_CM, LOW_CM
@@ -41,9 +41,10 @@ def default_database_path(map: str | Path | None = None) -> Path:
     """The database shipped for a shipped map (realistic sensor model, K = 8); others get the office's.
 
     ``map`` as :func:`envs.nomad.geometry.map_source` takes it: ``None``/``"office"`` is the default
-    office (``office_k8.npz``), ``"open"`` the open office (``open_k8.npz``).
+    office (``office_k8.npz``), a name in :data:`~envs.nomad.geometry.SHIPPED_MAPS` its ``<name>_k8.npz``.
     """
-    name = "open" if map_source(map) == map_source("open") else "office"
+    source = map_source(map)
+    name = next((name for name in SHIPPED_MAPS if source == map_source(name)), "office")
     return Path(__file__).with_name("data") / f"{name}_k8.npz"
 
 
@@ -194,6 +195,7 @@ def load_database(path: str | Path | None = None, core: OfficeCore | None = None
     format or schema version, missing or malformed arrays, non-finite or out-of-range readings,
     and (with ``core``) a map or lattice that differs from the environment's.
     """
+    defaulted = path is None
     path = default_database_path(None if core is None else core.office.source) if path is None else Path(path)
     name = str(path)
     if not path.is_file():
@@ -232,7 +234,15 @@ def load_database(path: str | Path | None = None, core: OfficeCore | None = None
     _validate(arrays["cells"], arrays["counts"], arrays["ranges_cm"], name)
     db = SensorDatabase(arrays["cells"], arrays["counts"], arrays["ranges_cm"], metadata)
     if core is not None:
-        db.check_map(core, f"database file {name}")
+        try:
+            db.check_map(core, f"database file {name}")
+        except ValueError as err:
+            if not defaulted:
+                raise
+            raise ValueError(
+                f"{err}. No database ships for this map: record one with `sb3-twodrl-record-database --map "
+                f"{core.office.source} --out DB.npz` and pass database='DB.npz'"
+            ) from err
     return db
 
 
