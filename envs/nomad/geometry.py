@@ -338,8 +338,9 @@ def check_goal_reachable(office: OfficeMap, lattice: Lattice) -> None:
             f"map file {office.source}: the goal {goal} cannot be reached from the start {start}: "
             f"{reached} of {len(lattice.cells)} free lattice cells are reachable, none in the goal; the goal's "
             f"{int(in_goal.sum())} free cells (e.g. {_xy(lattice.cells[np.argmax(in_goal)])}) are walled off for "
-            f"a {ROBOT_RADIUS_CM:.0f} cm radius robot moving {STEP_CM:.0f} cm N/E/S/W; widen the passages "
-            f"(a robot needs more than {2 * ROBOT_RADIUS_CM:.0f} cm)"
+            f"a {ROBOT_RADIUS_CM:.0f} cm radius robot moving {STEP_CM:.0f} cm N/E/S/W; widen the passages (the "
+            f"robot's centre stays more than {ROBOT_RADIUS_CM:.0f} cm from every wall, on the {STEP_CM:.0f} cm "
+            "lattice through the start)"
         )
 
 
