@@ -97,7 +97,7 @@ def test_goal_only_map_runs_without_route_metrics():
     for _ in range(20):  # east along the corridor
         obs, reward, terminated, _, info = env.step(1)
     assert reward == pytest.approx(-0.01) and not terminated and "route" not in info
-    assert info["position_cm"] == (240.0, 45.0) and env.render().shape[2] == 3
+    assert info["position_cm"] == (240.0, 50.0) and env.render().shape[2] == 3
     for _ in range(9):  # north through the door into the room: the goal (29 moves)
         obs, reward, terminated, _, info = env.step(0)
     assert terminated and info["is_success"] and reward == pytest.approx(4.99)
@@ -139,7 +139,7 @@ def test_user_map_without_database_says_how_to_record_one(tmp_path):
 def test_record_command_checks_a_map(capsys):
     record_main(["--map", "corridor", "--check"])
     out = capsys.readouterr().out
-    assert "OK" in out and "234 free lattice cells, 234 reachable" in out and "shortest path 29 moves" in out
+    assert "OK" in out and "189 free lattice cells, 189 reachable" in out and "shortest path 29 moves" in out
 
 
 def test_record_command_refuses_a_walled_off_map(tmp_path, capsys):
