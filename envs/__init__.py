@@ -10,9 +10,10 @@ Importing this package registers:
   office (start, gap and goal in one line: no dilemma; ``map="open"``, which any of the IDs also
   takes), kept so results can be shown on both maps.
 
-Every ID has a ``vector_entry_point``, its batched env
-(``gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point")``): sub-env ``i`` behaves
-exactly like ``gym.make(id)`` (tested).
+Every ID takes ``map=``: a built-in map (``"office"``, ``"open"``, ``"corridor"``: one route, no route
+regions) or a map file (docs/own_office.md). Every ID has a ``vector_entry_point``, its batched env
+(``gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point", **options)``), which takes every
+option of ``gym.make(id, **options)``: sub-env ``i`` behaves exactly like ``gym.make(id, **options)`` (tested).
 
 and, for the benchmark (``envs.public``, docs/benchmark.md), public tasks whose punishment is
 written into ``info["punishment"]`` (``reward_split="info"``):
