@@ -10,6 +10,7 @@ import pytest
 import envs  # noqa: F401  (registers the IDs)
 from envs.memorable.cli import main as record_main
 from envs.nomad.batched import make_sb3_vec_env
+from envs.nomad.dilemma import measure
 from envs.nomad.geometry import SHIPPED_MAPS, load_map
 from envs.nomad.office import office_core
 from sb3_twodrl.callbacks import EpisodeTracker, summarize_episodes
@@ -173,3 +174,8 @@ def test_record_command_writes_a_database_the_env_replays(tmp_path, capsys):
     ideal = gym.make("NomadOffice-v0", map="corridor")
     np.testing.assert_array_equal(replay.reset(seed=0)[0], ideal.reset(seed=0)[0])  # exact readings, one per cell
     np.testing.assert_array_equal(replay.step(1)[0], ideal.step(1)[0])
+
+
+def test_dilemma_figures_need_route_regions():
+    with pytest.raises(ValueError, match="has no route regions"):
+        measure(office_core("corridor"), 300)
