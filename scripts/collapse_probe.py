@@ -1,10 +1,11 @@
-"""Exploratory diagnostic (docs/interest.md, "Recovery from a collapsed actor"): does training bring an
-actor that has collapsed onto driving into the wall back to the goal?
+"""The collapse probe (``results/collapse_probe/``): does training bring an actor that has collapsed onto
+driving into the wall back to the goal?
 
 ``tests.toy_envs.LatticeCorridor(6, 3)`` (60-step limit, 4 envs, gamma 0.9), the actor's bias set to
 ``lead`` for west (the wall at the start) before training, 20k steps; then 20 stochastic test episodes
-(goal, crash) and the greedy policy's outcome. Run from the repository root:
-``PYTHONPATH=. python docs/diagnostics/collapse_probe.py [SETTING ...]`` (default: every setting).
+(goal, crash) and the greedy policy's outcome, one Markdown row per (setting, lead, ``ent_coef``, seed).
+Run from the repository root (the corridor lives in ``tests/``):
+``PYTHONPATH=. python scripts/collapse_probe.py [SETTING ...]`` (default: every setting).
 """
 
 import itertools
@@ -19,7 +20,7 @@ from tests.toy_envs import LatticeCorridor
 from twodrl_bench.variants import VariantTwoDimA2C as TwoDimA2C  # the interest modes are variants
 
 SETTINGS = {
-    "default (eq. 9, raw)": {},
+    "paper (eq. 9), raw": {"interest": "paper"},
     "relative, raw": {"interest": "relative"},
     "relative, bounded": {"interest": "relative", "preferences": "bounded"},
     "learned, raw": {"interest": "learned"},
