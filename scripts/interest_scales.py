@@ -1,4 +1,4 @@
-"""Scales of the interest and of the preferences during learning (docs/interest.md, "Measurements").
+"""Scales of the interest and of the preferences during learning (measured in docs/interest.md).
 
     python scripts/interest_scales.py --env NomadOffice-v0 --seed 0 --steps 300000 --interest paper --preferences raw
     python scripts/interest_scales.py --env CartPole-v1 --seed 0 --steps 100000 --interest paper --preferences raw

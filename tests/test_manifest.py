@@ -1,15 +1,22 @@
-"""``results/MANIFEST.md`` lists every file under ``results/``, and every link into ``results/`` resolves."""
+"""``results/MANIFEST.md`` lists every file under ``results/`` with a command and real commits, every study has its
+pre-registration, the files the README links are marked, and every link into ``results/`` resolves."""
 
 import re
 import subprocess
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "results"
 MANIFEST = RESULTS / "MANIFEST.md"
 
-# the first cell of a manifest row: [name](folder/file)
-ROW = re.compile(r"^\| \[[^\]]+\]\(([^)]+)\) \|", re.MULTILINE)
+MARK = "★"
+"""The mark of a file the README quotes."""
+# the first cell of a manifest row: [name](folder/file), marked or not
+ROW = re.compile(rf"^\| (?:{MARK} )?\[[^\]]+\]\(([^)]+)\) \|", re.MULTILINE)
+# a part's command list above its table: "- C1: `...`"
+COMMAND = re.compile(r"^- (C\d+): \S", re.MULTILINE)
 # a Markdown link or image target, and a path in inline code
 LINK = re.compile(r"\]\(([^)\s]+)\)")
 CODE = re.compile(r"`([^`\s]*results/[^`\s]*)`")
@@ -52,13 +59,62 @@ def test_every_manifest_entry_names_a_file() -> None:
     assert [e for e in entries if not (RESULTS / e).is_file()] == []
 
 
+def rows_by_section() -> list[tuple[set[str], list[list[str]]]]:
+    """Per ``###`` section of the manifest: the command labels it defines and the cells of its rows."""
+    sections = [s for s in re.split(r"^### ", MANIFEST.read_text(), flags=re.MULTILINE)[1:]]
+    out = []
+    for section in sections:
+        rows = [line for line in section.splitlines() if ROW.match(line + "\n")]
+        cells = [[c.strip() for c in re.split(r"(?<!\\)\|", line)[1:-1]] for line in rows]
+        out.append((set(COMMAND.findall(section)), cells))
+    return out
+
+
 def test_every_manifest_row_has_a_command_and_commits() -> None:
-    rows = [line for line in MANIFEST.read_text().splitlines() if ROW.match(line + "\n")]
-    for line in rows:
-        cells = [c.strip() for c in re.split(r"(?<!\\)\|", line)[1:-1]]
-        assert len(cells) == 6, line
-        assert cells[3], f"no command: {line}"
-        assert re.fullmatch(r"[0-9a-f]{7,40}", cells[4]) and re.fullmatch(r"[0-9a-f]{7,40}", cells[5]), line
+    sections = rows_by_section()
+    assert sum(len(rows) for _, rows in sections) == len(manifest_entries()), "a row outside a ### section"
+    for labels, rows in sections:
+        for cells in rows:
+            assert len(cells) == 5, cells
+            assert cells[2] == "text" or cells[2] in labels, f"command {cells[2]!r} not listed above its table: {cells}"
+            assert all(re.fullmatch(r"[0-9a-f]{7,40}", c) for c in cells[3:]), cells
+
+
+def test_the_manifest_commits_exist() -> None:
+    commits = sorted({c for _, rows in rows_by_section() for cells in rows for c in cells[3:]})
+    try:
+        out = subprocess.run(
+            ["git", "cat-file", "--batch-check"],
+            cwd=ROOT,
+            input="".join(f"{c}^{{commit}}\n" for c in commits),
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
+    except (OSError, subprocess.CalledProcessError):
+        pytest.skip("not a git checkout")
+    if "fatal: not a git repository" in out or not out:
+        pytest.skip("not a git checkout")
+    missing = [c for c, line in zip(commits, out.splitlines(), strict=True) if line.endswith("missing")]
+    assert missing == [], "commits named in MANIFEST.md that git does not have"
+
+
+def test_every_study_has_its_preregistration() -> None:
+    studies = [p for p in RESULTS.iterdir() if p.is_dir()]
+    assert studies
+    assert [p.name for p in studies if not (p / "preregistration.md").is_file()] == []
+    headings = re.findall(r"^## (\S+)$", MANIFEST.read_text(), flags=re.MULTILINE)
+    assert sorted(headings) == sorted(p.name for p in studies), "one ## heading per study folder"
+
+
+def test_the_files_the_readme_links_are_marked() -> None:
+    marked = set(re.findall(rf"^\| {MARK} \[[^\]]+\]\(([^)]+)\) \|", MANIFEST.read_text(), flags=re.MULTILINE))
+    linked = set()
+    for target in LINK.findall((ROOT / "README.md").read_text()):
+        path = (ROOT / target.split("#")[0]).resolve()
+        if path.is_file() and RESULTS in path.parents and path != MANIFEST:
+            linked.add(path.relative_to(RESULTS).as_posix())
+    assert sorted(linked - marked) == [], f"files the README links that MANIFEST.md does not mark {MARK}"
 
 
 def test_links_into_results_resolve() -> None:

@@ -75,12 +75,12 @@ def test_the_tabular_oracle_setting() -> None:
 
 
 ROWS = [  # (arm, committed results file, seed): one row per kind of variant, its epoch 1
-    ("learned_skip_uniform", "ablation_learned_skip_uniform_results.csv", 0),
-    ("relative_skip_uniform", "ablation_relative_skip_uniform_results.csv", 0),
-    ("paper_skip_uniform", "ablation_skip_uniform_results.csv", 10),
-    ("paper_tempered", "ablation_ent200_results.csv", 0),
-    ("paper", "ablation_ent_results.csv", 0),  # actor_update="log_prob"
-    ("relative_bounded", "ablation_ent_results.csv", 0),
+    ("learned_skip_uniform", "ent0.05_learned_skip_uniform/rows.csv", 0),
+    ("relative_skip_uniform", "ent0.05_relative_skip_uniform/rows.csv", 0),
+    ("paper_skip_uniform", "ent0.05_skip_uniform_seeds10-19/rows.csv", 10),
+    ("paper_tempered", "ent0.05_paper_tempered_200epochs/rows.csv", 0),
+    ("paper", "ent0.05/rows.csv", 0),  # actor_update="log_prob"
+    ("relative_bounded", "ent0.05/rows.csv", 0),
 ]
 
 
