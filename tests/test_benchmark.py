@@ -21,7 +21,7 @@ pytest.importorskip("scipy")
 import envs  # noqa: F401  (registers the IDs)
 from sb3_twodrl.common.splitting import split_info
 from twodrl_bench.reports.benchmark import report, verdict
-from twodrl_bench.timesteps import run_job
+from twodrl_bench.timesteps import resolve_arm, run_job
 
 TASKS = ("CliffWalking", "LunarLander", "LavaGap", "CartPole", "Acrobot", "Pendulum")
 RESULTS = Path(__file__).parents[1] / "results" / "benchmark"
@@ -120,7 +120,9 @@ def test_smoke_each_task_spec_trains_and_evaluates_its_arms(tmp_path, task: str,
     spec = load_spec(task)
     for arm in arms:
         protocol = {**spec["protocol"], "timesteps": 512, "eval_episodes": 1}
-        (row,) = run_job({"name": arm, **spec["arms"][arm]}, spec["env"], {}, protocol, 0, str(tmp_path), ["envs"])
+        job_arm = {"name": arm, "algo": spec["arms"][arm]["algo"]}
+        job_arm["hyperparams"] = resolve_arm(spec["arms"][arm], spec["env"], protocol)
+        (row,) = run_job(job_arm, spec["env"], {}, protocol, 0, str(tmp_path), ["envs"])
         assert row["arm"] == arm and row["task"] == task and row["n_timesteps"] == 512
         assert math.isfinite(row["final_return"]) and row["final_events"] >= 0 and row["train_episodes"] >= 0
         assert len(json.loads(row["curve"])) == 20

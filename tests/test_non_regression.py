@@ -40,7 +40,10 @@ def test_specs_train_the_packaged_entries(env: str) -> None:
 def test_tiny_pendulum_run_evaluates_with_frozen_statistics_and_applies_overrides(tmp_path) -> None:
     spec = load_spec("Pendulum-v1")
     protocol = {**spec["protocol"], "timesteps": 128, "eval_episodes": 1}
-    arm = {"name": "twoda2c", **spec["arms"]["twoda2c"], "override": {"min_temperature": 1.0}}
+    hyperparams = resolve_arm(
+        {**spec["arms"]["twoda2c"], "override": {"min_temperature": 1.0}}, "Pendulum-v1", protocol
+    )
+    arm = {"name": "twoda2c", "algo": "twoda2c", "hyperparams": hyperparams}
     (row,) = run_job(arm, "Pendulum-v1", {}, protocol, 0, str(tmp_path), spec["gym_packages"])
     assert row["arm"] == "twoda2c" and row["task"] == "Pendulum-v1" and math.isfinite(row["final_return"])
     run = tmp_path / "zoo" / "twoda2c_seed0" / "twoda2c" / "Pendulum-v1_1"

@@ -38,15 +38,11 @@ def _same(a: object, b: object) -> bool:
 
 
 def _job(spec: dict[str, Any], arm: str, seed: int, out: Path, **protocol: Any) -> dict[str, Any]:
-    (row,) = run_job(
-        {"name": arm, **spec["arms"][arm]},
-        spec["env"],
-        spec.get("env_kwargs") or {},
-        {**spec["protocol"], **protocol},
-        seed,
-        str(out),
-        spec["gym_packages"],
-    )
+    """The job of (``arm``, ``seed``) as the runner calls it: the arm resolved, ``protocol`` over the spec's."""
+    protocol = {**spec["protocol"], **protocol}
+    hyperparams = resolve_arm(spec["arms"][arm], spec["env"], protocol)
+    job_arm = {"name": arm, "algo": spec["arms"][arm]["algo"], "hyperparams": hyperparams}
+    (row,) = run_job(job_arm, spec["env"], spec.get("env_kwargs") or {}, protocol, seed, str(out), spec["gym_packages"])
     return row
 
 
@@ -149,10 +145,16 @@ def test_bad_protocol_names_the_key(protocol: dict[str, Any], match: str) -> Non
 
 def test_bad_job_input_is_refused_before_training(tmp_path) -> None:
     protocol = {"timesteps": 64, "eval_episodes": 1}
+    entry = resolve_arm({"algo": "a2c"}, "CartPole-v1", protocol)
     with pytest.raises(ValueError, match="seed must be an int >= 0, got -1"):
-        run_job({"algo": "a2c"}, "CartPole-v1", {}, protocol, -1, str(tmp_path), [])
+        run_job({"name": "a", "algo": "a2c", "hyperparams": entry}, "CartPole-v1", {}, protocol, -1, str(tmp_path), [])
     with pytest.raises(ValueError, match="algo must be one of rl-zoo3's"):
-        run_job({"algo": "nope"}, "CartPole-v1", {}, protocol, 0, str(tmp_path), [])
+        run_job({"name": "a", "algo": "nope", "hyperparams": entry}, "CartPole-v1", {}, protocol, 0, str(tmp_path), [])
+    with pytest.raises(ValueError, match=r"arm must be \{name, algo, hyperparams\}"):
+        run_job({"algo": "a2c", "override": {}}, "CartPole-v1", {}, protocol, 0, str(tmp_path), [])
+    unresolved = {"name": "a", "algo": "a2c", "hyperparams": entry}  # resolved without the protocol's events
+    with pytest.raises(ValueError, match="monitor_kwargs must record 'cliff_falls'"):
+        run_job(unresolved, "CartPole-v1", {}, {**protocol, "events": "cliff_falls"}, 0, str(tmp_path), [])
     assert not (tmp_path / "zoo").exists()
 
 

@@ -18,7 +18,9 @@ Keys this job reads, beside the fields every spec has:
 - ``arms.<name>.settings``: ``packaged`` (default: :mod:`sb3_twodrl.hyperparams`' ``<algo>.yml``), ``rl-zoo3``
   (rl-zoo3's own ``hyperparams/<algo>.yml``, of the stock algorithm for a 2D-RL one: :data:`STOCK`) or a folder
   of ``<algo>.yml``; ``arms.<name>.override``: settings over the entry (the 2D-RL arguments, a budget, ...).
-- ``arms.<name>.name`` (set by the runner): the rows' ``arm`` label (default: the arm's ``algo``).
+
+Resolving a spec's timesteps arm is :func:`resolve_arm`; the job gets the arm as the runner passes it, ``{name,
+algo, hyperparams}`` (``name`` the rows' ``arm`` label, ``hyperparams`` :func:`resolve_arm`'s entry).
 
 Requires the ``zoo`` extra.
 """
@@ -94,14 +96,28 @@ def resolve_arm(arm: dict[str, Any], env: str, protocol: dict[str, Any]) -> dict
     if not isinstance(arm, dict) or not isinstance(arm.get("algo"), str):
         raise ValueError(f"arm must be a mapping with an 'algo' name, got {arm!r}")
     entry = {**read_entry(settings_file(arm), protocol.get("entry") or env), **(arm.get("override") or {})}
+    if protocol.get("events"):
+        entry["monitor_kwargs"] = monitor_kwargs(protocol["events"])
+    check_entry(arm["algo"], entry, protocol)
+    return entry
+
+
+def monitor_kwargs(events: str) -> str:
+    """The entry's ``monitor_kwargs`` that make the training envs' ``Monitor`` record the ``events`` info key."""
+    return f"dict(info_keywords=('{events}',))"
+
+
+def check_entry(name: str, entry: dict[str, Any], protocol: dict[str, Any]) -> None:
+    """:raises ValueError: if the ``Monitor`` does not record ``protocol.events``, or if a 2D-RL arm that reads
+    ``info`` would see rewards that ``VecNormalize`` rescales (its ``r_R = reward + info["punishment"]`` would mix
+    two scales)"""
     events = protocol.get("events")
-    if events:
-        entry["monitor_kwargs"] = f"dict(info_keywords=('{events}',))"
+    if events and entry.get("monitor_kwargs") != monitor_kwargs(events):
+        raise ValueError(f"arm {name!r}: monitor_kwargs must record {events!r} (resolve the arm with resolve_arm)")
     normalize = entry.get("normalize", False)
     scaled = normalize if isinstance(normalize, bool) else "'norm_reward': False" not in normalize
     if scaled and entry.get("reward_split") in ("info", "cost"):
-        raise ValueError(f"arm {arm['algo']!r}: the entry normalises rewards, which reward_split='info' cannot split")
-    return entry
+        raise ValueError(f"arm {name!r}: the entry normalises rewards, which reward_split='info' cannot split")
 
 
 def training_episodes(run_dir: Path, n_envs: int, events: str | None) -> np.ndarray:
@@ -183,6 +199,8 @@ def run_job(
 
     clock = time.perf_counter()
     check_protocol(protocol)
+    if not isinstance(arm.get("name"), str) or not arm["name"] or not isinstance(arm.get("hyperparams"), dict):
+        raise ValueError(f"arm must be {{name, algo, hyperparams}} (resolve_arm's entry), got {arm!r}")
     register_zoo()
     if arm.get("algo") not in zoo_utils.ALGOS:
         raise ValueError(f"arm algo must be one of rl-zoo3's {sorted(zoo_utils.ALGOS)}, got {arm.get('algo')!r}")
@@ -191,15 +209,16 @@ def run_job(
     for package in gym_packages:
         importlib.import_module(package)
     th.set_num_threads(1)
-    algo, name, events = arm["algo"], str(arm.get("name") or arm["algo"]), protocol.get("events")
-    entry = resolve_arm(arm, env, protocol)
+    algo, name, events = arm["algo"], arm["name"], protocol.get("events")
+    entry = copy.deepcopy(arm["hyperparams"])
+    check_entry(name, entry, protocol)
     if env_kwargs:
         entry["env_kwargs"] = {**(entry.get("env_kwargs") or {}), **env_kwargs}
     log = Path(out_dir) / "zoo" / f"{name}_seed{seed}"
     shutil.rmtree(log, ignore_errors=True)  # what an interrupted attempt left
     log.mkdir(parents=True)
     conf = log / f"{algo}.yml"
-    conf.write_text(yaml.safe_dump({env: copy.deepcopy(entry)}))
+    conf.write_text(yaml.safe_dump({env: entry}))
     argv = ["--algo", algo, "--env", env, "--seed", str(seed), "-f", str(log), "--eval-freq", "-1"]
     argv += ["--vec-env", "dummy", "--log-interval", "-1", "--device", "cpu", "--conf-file", str(conf)]
     if protocol.get("timesteps") is not None:
