@@ -1,38 +1,34 @@
-"""twodrl_bench.benchmark and envs.public: the split wrappers against the envs' own signals, a smoke
-run per task (both arms), the resume after a kill, bad input."""
+"""The benchmark on public tasks: envs.public's split wrappers against the envs' own signals, a smoke run of
+every task's spec (both arms), and its report (twodrl_bench.reports.benchmark) against the committed tables."""
 
 from __future__ import annotations
 
+import csv
 import json
 import math
-import os
-import shutil
-import signal
-import subprocess
-import sys
-import time
+from importlib import resources
 from pathlib import Path
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
 import pytest
+import yaml
 
 pytest.importorskip("rl_zoo3")
 pytest.importorskip("scipy")
 
 import envs  # noqa: F401  (registers the IDs)
 from sb3_twodrl.common.splitting import split_info
-from twodrl_bench.benchmark import (
-    TASKS,
-    benchmark,
-    learning_curve,
-    parse_args,
-    table,
-    train_and_evaluate,
-    training_episodes,
-    verdict,
-    zoo_entry,
-)
+from twodrl_bench.reports.benchmark import report, verdict
+from twodrl_bench.timesteps import resolve_arm, run_job
+
+TASKS = ("CliffWalking", "LunarLander", "LavaGap", "CartPole", "Acrobot", "Pendulum")
+RESULTS = Path(__file__).parents[1] / "results" / "benchmark"
+
+
+def load_spec(task: str) -> dict[str, Any]:
+    return yaml.safe_load(resources.files("twodrl_bench").joinpath("specs", "benchmark", f"{task}.yml").read_text())
 
 
 def _check_split(reward: float, info: dict) -> None:
@@ -108,144 +104,103 @@ def test_lava_split_punishes_lava_only() -> None:
     assert True in outcomes  # lava was reached at least once
 
 
-def test_monitor_files_become_training_episodes_and_a_curve(tmp_path) -> None:
-    for i, lines in enumerate((["-3,2,0.1,1", "-1,4,0.2,0"], ["-5,3,0.1,2"])):
-        (tmp_path / f"{i}.monitor.csv").write_text('#{"t_start": 0}\nr,l,t,cliff_falls\n' + "\n".join(lines) + "\n")
-    episodes = training_episodes(tmp_path, 2, "cliff_falls")
-    assert episodes.tolist() == [[4, -3, 1], [6, -5, 2], [12, -1, 0]]  # ended at (steps of its env) * n_envs
-    curve = learning_curve(episodes, 12, bins=2)
-    assert curve == [[6.0, -4.0, 1.5], [12.0, -1.0, 0.0]]
-    assert math.isnan(learning_curve(episodes, 24, bins=2)[1][1])  # an empty bin
-
-
 @pytest.mark.parametrize(
-    ("name", "arms"),
+    ("task", "arms"),
     [
-        ("CliffWalking", ("a2c", "twoda2c", "ppo", "twodppo")),
+        ("CliffWalking", ("a2c", "twoda2c", "twoda2c-sign", "ppo", "twodppo", "twodppo-sign")),
         ("LunarLander", ("a2c", "twoda2c")),
         ("LavaGap", ("ppo", "twodppo")),
+        ("Acrobot", ("twoda2c", "twodppo")),
     ],
 )
-def test_smoke_each_task_trains_and_evaluates_both_arms(tmp_path, name: str, arms: tuple[str, ...]) -> None:
-    """A few hundred steps per arm (at least one rollout), one deterministic episode; the row is complete."""
-    pytest.importorskip({"LunarLander": "Box2D", "LavaGap": "minigrid"}.get(name, "gymnasium"))
+def test_smoke_each_task_spec_trains_and_evaluates_its_arms(tmp_path, task: str, arms: tuple[str, ...]) -> None:
+    """A few hundred steps per arm (at least one rollout), one deterministic episode; the row is complete.
+    PPO on LunarLander is left out: its entry's rollout alone is 16,384 steps."""
+    pytest.importorskip({"LunarLander": "Box2D", "LavaGap": "minigrid"}.get(task, "gymnasium"))
+    spec = load_spec(task)
     for arm in arms:
-        row = train_and_evaluate(name, arm, 0, str(tmp_path), 1, 256)
-        assert row["arm"] == arm and row["n_timesteps"] == 256 and math.isfinite(row["final_return"])
-        assert len(row["curve"]) == 20 and row["final_events"] >= 0
-        assert (tmp_path / f"{arm}_seed0" / "curve.json").exists()
+        protocol = {**spec["protocol"], "timesteps": 512, "eval_episodes": 1}
+        job_arm = {"name": arm, "algo": spec["arms"][arm]["algo"]}
+        job_arm["hyperparams"] = resolve_arm(spec["arms"][arm], spec["env"], protocol)
+        (row,) = run_job(job_arm, spec["env"], {}, protocol, 0, str(tmp_path), ["envs"])
+        assert row["arm"] == arm and row["task"] == task and row["n_timesteps"] == 512
+        assert math.isfinite(row["final_return"]) and row["final_events"] >= 0 and row["train_episodes"] >= 0
+        assert len(json.loads(row["curve"])) == 20
 
 
-def _same(a: object, b: object) -> bool:
-    """Equal as JSON (NaN, an empty curve bin, equals NaN)."""
-    return json.dumps(a, sort_keys=True) == json.dumps(b, sort_keys=True)
+def test_every_task_spec_names_its_rules() -> None:
+    for task in TASKS:
+        spec = load_spec(task)
+        assert (
+            spec["name"] == f"benchmark/{task}" and spec["report"] == "benchmark" and spec["seeds"] == list(range(10))
+        )
+        assert set(spec["rules"]["compare"]) | set(spec["rules"]["compare"].values()) == set(spec["arms"])
+        assert (spec["rules"]["events"] is None) == (spec["protocol"]["events"] is None)
 
 
-def test_command_resumes_after_a_kill_without_changing_rows(tmp_path) -> None:
-    argv = ["--env", "CliffWalking", "--algos", "a2c", "twoda2c", "--seeds", "0", "1", "--n-timesteps", "800"]
-    argv += ["--episodes", "1", "--out", str(tmp_path / "a"), "--workers", "0"]
-    rows = benchmark(argv)
-    out = tmp_path / "a" / "CliffWalking"
-    assert [(r["arm"], r["seed"]) for r in rows] == [("a2c", 0), ("a2c", 1), ("twoda2c", 0), ("twoda2c", 1)]
-    assert "twoda2c" in (out / "table.md").read_text() and (out / "curve.png").exists()
-    kept = (out / "rows.json").read_text()
-    model = out / "runs" / "a2c_seed0" / "a2c" / "CliffWalkingSplit-v1_1" / "CliffWalkingSplit-v1.zip"
-    stamp = model.stat().st_mtime_ns
-    assert (
-        _same(benchmark(argv), rows) and (out / "rows.json").read_text() == kept and model.stat().st_mtime_ns == stamp
-    )
-    # a kill during twoda2c seed 1: its row not written, its logs half written
-    stored = json.loads(kept)
-    killed = stored.pop("twoda2c_seed1")
-    (out / "rows.json").write_text(json.dumps(stored))
-    shutil.rmtree(out / "runs" / "twoda2c_seed1" / "twoda2c")
-    (out / "runs" / "twoda2c_seed1" / "twoda2c" / "CliffWalkingSplit-v1_1").mkdir(parents=True)
-    again = benchmark(argv)
-    assert _same(again[:3], rows[:3])  # kept rows unchanged, not recomputed
-    assert _same({**again[3], "wall_s": 0}, {**killed, "wall_s": 0})  # the rerun gives the uninterrupted row
-    assert model.stat().st_mtime_ns == stamp
+def _committed_rows(task: str) -> list[dict[str, Any]]:
+    return list(json.loads((RESULTS / task / "rows.json").read_text()).values())
 
 
-def test_kept_rows_of_other_settings_are_refused(tmp_path) -> None:
-    argv = ["--env", "CliffWalking", "--algos", "a2c", "--seeds", "0", "1", "--out", str(tmp_path)]
-    (tmp_path / "CliffWalking").mkdir()
-    (tmp_path / "CliffWalking" / "settings.json").write_text(json.dumps({"a2c": "other"}))
-    with pytest.raises(ValueError, match="results of a2c with other settings"):
-        benchmark(argv)
+def test_report_of_the_committed_rows_reproduces_the_committed_tables(tmp_path) -> None:
+    """One table over the six tasks: every line of each task's committed ``table.md`` is in it; one figure a task."""
+    pytest.importorskip("matplotlib")
+    rows = [row for task in TASKS for row in _committed_rows(task)]
+    text = report(rows, [load_spec(task) for task in TASKS], tmp_path)
+    lines = text.splitlines()
+    for task in TASKS:
+        committed = (RESULTS / task / "table.md").read_text().splitlines()
+        assert [line for line in committed if line not in lines] == [], task
+    assert (tmp_path / "table.md").read_text() == text + "\n"
+    assert sorted(p.name for p in tmp_path.glob("*.png")) == sorted(f"{task}_curve.png" for task in TASKS)
 
 
-@pytest.mark.parametrize(
-    ("argv", "match"),
-    [
-        (["--env", "Breakout"], "env must be one of"),
-        (["--env", "LavaGap", "--algos", "a2c"], "algos: 'a2c' is not an arm"),
-        (["--env", "LunarLander", "--algos", "twoda2c-sign"], "algos: 'twoda2c-sign'"),
-        (["--env", "CliffWalking", "--seeds", "0"], "seeds"),
-        (["--env", "CliffWalking", "--episodes", "0"], "episodes"),
-        (["--env", "CliffWalking", "--n-timesteps", "0"], "n_timesteps"),
-    ],
-)
-def test_bad_input_names_the_argument(argv: list[str], match: str) -> None:
-    with pytest.raises(ValueError, match=match):
-        parse_args(argv)
+def test_report_reads_rows_back_from_csv(tmp_path) -> None:
+    """Rows as the runner stores them (CSV text, the curve as JSON text) give the same table."""
+    rows = _committed_rows("CliffWalking")
+    path = tmp_path / "rows.csv"
+    with path.open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows({**row, "curve": json.dumps(row["curve"])} for row in rows)
+    with path.open() as f:
+        text = report(list(csv.DictReader(f)), load_spec("CliffWalking"), tmp_path / "csv", figures=False)
+    assert text == report(rows, load_spec("CliffWalking"), tmp_path / "json", figures=False)
 
 
-def test_entries_share_the_stock_settings_and_refuse_a_rescaled_info_split() -> None:
-    spec = TASKS["LunarLander"]
-    stock, two_dim = zoo_entry(spec, "a2c"), zoo_entry(spec, "twoda2c")
-    assert two_dim == {**stock, "reward_split": "info", "punishment_gamma": 0.1}
-    assert stock["n_timesteps"] == 2e5 and stock["monitor_kwargs"] == "dict(info_keywords=('crash',))"
-    assert zoo_entry(TASKS["CliffWalking"], "twoda2c-sign")["reward_split"] == "sign"
-    assert zoo_entry(TASKS["LavaGap"], "twodppo")["normalize"] == "{'norm_obs': True, 'norm_reward': False}"
-    rescaled = TASKS["LavaGap"].__class__(**{**vars(TASKS["LavaGap"]), "overrides": {}})
-    with pytest.raises(ValueError, match="normalises rewards"):
-        zoo_entry(rescaled, "twodppo")
+def test_report_refuses_rows_of_another_task_and_incomplete_rules(tmp_path) -> None:
+    with pytest.raises(ValueError, match="task 'LunarLander' is none of the specs' tasks"):
+        report(_committed_rows("LunarLander"), load_spec("CartPole"), tmp_path, figures=False)
+    spec = load_spec("CartPole")
+    del spec["rules"]["min_seeds"]
+    with pytest.raises(ValueError, match=r"rules lack \['min_seeds'\]"):
+        report([], spec, tmp_path, figures=False)
 
 
-def test_table_pairs_each_2d_arm_with_its_stock_arm() -> None:
+def test_table_pairs_each_2d_arm_with_its_stock_arm(tmp_path) -> None:
     rows = [
-        {"arm": arm, "seed": s, "final_return": ret + s, "train_events_per_episode": ev, "n_timesteps": 100}
-        | {"final_length": 13 + 2 * s, "final_events": 0.0}
+        {"task": "CliffWalking", "env": "CliffWalkingSplit-v1", "arm": arm, "seed": s, "n_timesteps": 100}
+        | {"final_return": ret + s, "train_events_per_episode": ev, "final_length": 13 + 2 * s, "final_events": 0.0}
         for arm, ret, ev in (("a2c", -20.0, 1.0), ("twoda2c", -15.0, 0.5), ("twoda2c-sign", -30.0, 2.0))
         for s in range(3)
     ]
-    text = table("CliffWalking", rows)
+    text = report(rows, load_spec("CliffWalking"), tmp_path, figures=False)
     assert "| CliffWalking | 100 | a2c | -19.0 [" in text
     assert "| twoda2c | -14.0 [-16.5, -11.5] (n=3) | +5.0 [+2.7, +7.3] |" in text
-    assert "| twoda2c-sign |" in text and "-0.500" in text
+    assert "| twoda2c-sign |" in text and "-0.500" in text and "no verdict (< 5 seeds)" in text
     assert "| a2c | 1/3 [0.06, 0.79] | 1/3 [0.06, 0.79] | 1/3 [0.06, 0.79] | 0/3 [0.00, 0.56] |" in text
 
 
 def test_verdict_follows_the_pre_registered_rule() -> None:
     base, up, down = [0.0, 1.0, 2.0, 3.0, 4.0], [10.0, 11.0, 12.0, 13.0, 14.0], [-10.0, -9.0, -8.0, -7.0, -6.0]
-    assert verdict(up, base, base, base) == "helps"  # return interval above 0
-    assert verdict(base, base, down, base) == "helps"  # fewer events, no loss of return
-    assert verdict(down, base, base, base) == "hurts"
-    assert verdict(base, base, up, base) == "hurts"  # more events
-    assert verdict(up, base, up, base) == "trade-off"  # rules 1 and 2 both hold: more return, more events
-    assert verdict(down, base, down, base) == "hurts"  # fewer events at a loss of return: rule 1 needs no loss
-    assert verdict(base, base[::-1], base, base) == "no difference shown"
-    assert verdict(up, base, [], []) == "helps"  # a task without events
-    assert verdict(up[:4], base[:4], [], []).startswith("no verdict")
-
-
-@pytest.mark.slow
-def test_command_killed_for_real_resumes_to_the_rows_of_an_uninterrupted_run(tmp_path) -> None:
-    """SIGKILL the command (its own process group) after its first row; run it again; compare with a clean run."""
-    argv = ["--env", "CliffWalking", "--algos", "a2c", "twoda2c", "--seeds", "0", "1", "--n-timesteps", "800"]
-    argv += ["--episodes", "1", "--workers", "0", "--no-figure"]
-    clean = benchmark([*argv, "--out", str(tmp_path / "clean")])
-    store = tmp_path / "killed" / "CliffWalking" / "rows.json"
-    command = [sys.executable, "scripts/benchmark.py", *argv, "--out", str(tmp_path / "killed")]
-    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1]), "OMP_NUM_THREADS": "1"}
-    proc = subprocess.Popen(command, cwd=Path(__file__).resolve().parents[1], env=env, start_new_session=True)
-    try:
-        while proc.poll() is None and not (store.exists() and json.loads(store.read_text())):
-            time.sleep(0.2)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-        proc.wait()
-    assert 1 <= len(json.loads(store.read_text())) < 4  # killed midway
-    resumed = benchmark([*argv, "--out", str(tmp_path / "killed")])
-    assert _same([{**r, "wall_s": 0} for r in resumed], [{**r, "wall_s": 0} for r in clean])
+    assert verdict(up, base, base, base, 5) == "helps"  # return interval above 0
+    assert verdict(base, base, down, base, 5) == "helps"  # fewer events, no loss of return
+    assert verdict(down, base, base, base, 5) == "hurts"
+    assert verdict(base, base, up, base, 5) == "hurts"  # more events
+    assert verdict(up, base, up, base, 5) == "trade-off"  # rules 1 and 2 both hold: more return, more events
+    assert verdict(down, base, down, base, 5) == "hurts"  # fewer events at a loss of return: rule 1 needs no loss
+    assert verdict(base, base[::-1], base, base, 5) == "no difference shown"
+    assert verdict(up, base, [], [], 5) == "helps"  # a task without events
+    assert verdict(up[:4], base[:4], [], [], 5).startswith("no verdict (< 5")
+    assert verdict(up[:4], base[:4], [], [], 4) == "helps"  # min_seeds is the spec's
+    assert np.isfinite(base).all()

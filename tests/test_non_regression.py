@@ -1,59 +1,81 @@
-"""twodrl_bench.non_regression: rl-zoo3 training, frozen VecNormalize evaluation, table, resume."""
+"""The non-regression check as specs (``non_regression/<env>``): the timesteps job on the packaged settings with a
+frozen VecNormalize evaluation, and its report against the committed tables."""
 
 from __future__ import annotations
 
 import json
 import math
+from importlib import resources
+from pathlib import Path
+from typing import Any
 
 import pytest
+import yaml
 
 pytest.importorskip("rl_zoo3")
 pytest.importorskip("scipy")
 
 from sb3_twodrl import TwoDimA2C
-from twodrl_bench.non_regression import check_settings, non_regression, parse_args, settings
+from sb3_twodrl.hyperparams import hyperparams_path, read_entry
+from twodrl_bench.reports.non_regression import report
+from twodrl_bench.timesteps import resolve_arm, run_job
+
+ENVS = ("CartPole-v1", "Acrobot-v1", "Pendulum-v1")
+RESULTS = Path(__file__).parents[1] / "results" / "non_regression"
 
 
-@pytest.mark.slow  # spawns rl-zoo3 training processes (about 40 s); CI's wheel check runs the command
-def test_tiny_pendulum_check_evaluates_every_seed_and_resumes(tmp_path) -> None:
-    argv = ["--env", "Pendulum-v1", "--seeds", "0", "1", "--n-timesteps", "128", "--episodes", "1"]
-    argv += ["--out", str(tmp_path), "--workers", "2", "--set", "min_temperature:1.0"]
-    returns = non_regression(argv)
-    assert sorted(returns) == ["a2c", "twoda2c"]
-    assert all(len(v) == 2 and all(math.isfinite(x) and x < 0 for x in v) for v in returns.values())
-    run = tmp_path / "Pendulum-v1" / "twoda2c_seed0" / "twoda2c" / "Pendulum-v1_1"
+def load_spec(env: str) -> dict[str, Any]:
+    return yaml.safe_load(resources.files("twodrl_bench").joinpath("specs", "non_regression", f"{env}.yml").read_text())
+
+
+@pytest.mark.parametrize("env", ENVS)
+def test_specs_train_the_packaged_entries(env: str) -> None:
+    spec = load_spec(env)
+    assert spec["name"] == f"non_regression/{env}" and spec["env"] == env and spec["report"] == "non_regression"
+    for name, arm in spec["arms"].items():
+        assert resolve_arm(arm, env, spec["protocol"]) == read_entry(hyperparams_path(arm["algo"]), env), name
+    assert spec["rules"]["baseline"] in spec["arms"]
+
+
+def test_tiny_pendulum_run_evaluates_with_frozen_statistics_and_applies_overrides(tmp_path) -> None:
+    spec = load_spec("Pendulum-v1")
+    protocol = {**spec["protocol"], "timesteps": 128, "eval_episodes": 1}
+    hyperparams = resolve_arm(
+        {**spec["arms"]["twoda2c"], "override": {"min_temperature": 1.0}}, "Pendulum-v1", protocol
+    )
+    arm = {"name": "twoda2c", "algo": "twoda2c", "hyperparams": hyperparams}
+    (row,) = run_job(arm, "Pendulum-v1", {}, protocol, 0, str(tmp_path), spec["gym_packages"])
+    assert row["arm"] == "twoda2c" and row["task"] == "Pendulum-v1" and math.isfinite(row["final_return"])
+    run = tmp_path / "zoo" / "twoda2c_seed0" / "twoda2c" / "Pendulum-v1_1"
     assert (run / "Pendulum-v1" / "vecnormalize.pkl").exists()  # the entry normalises: stats saved and used
-    assert TwoDimA2C.load(run / "Pendulum-v1.zip").min_temperature == 1.0  # --set reached rl-zoo3
-    stamp = (run / "Pendulum-v1.zip").stat().st_mtime_ns
-    assert non_regression(argv) == returns and (run / "Pendulum-v1.zip").stat().st_mtime_ns == stamp
-    stored = json.loads((tmp_path / "Pendulum-v1" / "returns.json").read_text())
-    assert stored["twoda2c_seed1"] == returns["twoda2c"][1]
-    assert "minus a2c" in (tmp_path / "Pendulum-v1" / "table.md").read_text()
+    assert TwoDimA2C.load(run / "Pendulum-v1.zip").min_temperature == 1.0  # the override reached rl-zoo3
 
 
-def test_one_seed_is_refused() -> None:
-    with pytest.raises(ValueError, match="seeds"):
-        parse_args(["--env", "CartPole-v1", "--seeds", "0"])
+def _records() -> list[tuple[Path, str]]:
+    return [(path, path.stem) for path in sorted(RESULTS.glob("*/*.json"))]
 
 
-def test_kept_results_of_other_settings_are_refused(tmp_path) -> None:
-    """A changed entry (or budget) would silently mix old returns into the table: refused, naming the algo."""
-    (tmp_path / "a2c.yml").write_text("CartPole-v1:\n  n_envs: 8\n")
-    (tmp_path / "twoda2c.yml").write_text("CartPole-v1:\n  n_envs: 8\n  interest: 'paper'\n")
-    argv = ["--env", "CartPole-v1", "--hyperparams-dir", str(tmp_path)]
-    check_settings(tmp_path, settings(parse_args(argv)))
-    check_settings(tmp_path, settings(parse_args(argv)))  # the same settings resume
-    (tmp_path / "twoda2c.yml").write_text("CartPole-v1:\n  n_envs: 8\n  interest: 'relative'\n")
-    with pytest.raises(ValueError, match="results of twoda2c with other settings"):
-        check_settings(tmp_path, settings(parse_args(argv)))
-    with pytest.raises(ValueError, match="no entry for 'Acrobot-v1'"):
-        settings(parse_args(["--env", "Acrobot-v1", "--hyperparams-dir", str(tmp_path)]))
+@pytest.mark.parametrize(("record", "env"), _records(), ids=[f"{p.parent.name}/{e}" for p, e in _records()])
+def test_report_of_each_committed_record_reproduces_its_table(tmp_path, record: Path, env: str) -> None:
+    """The records (``<algo>_seed<seed>`` -> mean return) as rows: the report gives the committed table, exactly."""
+    rows = [
+        {"task": env, "env": env, "arm": key.rsplit("_seed", 1)[0], "seed": int(key.rsplit("_seed", 1)[1])}
+        | {"final_return": value}
+        for key, value in json.loads(record.read_text()).items()
+    ]
+    text = report(rows, load_spec(env), tmp_path)
+    assert text + "\n" == record.with_suffix(".md").read_text() == (tmp_path / "table.md").read_text()
 
 
-def test_set_changes_only_the_2d_algo_and_is_part_of_the_settings(tmp_path) -> None:
-    (tmp_path / "a2c.yml").write_text("CartPole-v1:\n  n_envs: 8\n")
-    (tmp_path / "twoda2c.yml").write_text("CartPole-v1:\n  n_envs: 8\n")
-    argv = ["--env", "CartPole-v1", "--hyperparams-dir", str(tmp_path)]
-    plain = settings(parse_args(argv))
-    changed = settings(parse_args([*argv, "--set", "min_temperature:1.0"]))
-    assert changed["a2c"] == plain["a2c"] and changed["twoda2c"] != plain["twoda2c"]
+def test_report_spans_envs_and_refuses_unknown_rows(tmp_path) -> None:
+    rows = [
+        {"task": env, "arm": arm, "seed": seed, "final_return": str(0.0 - 10.0 * seed - (arm == "twoda2c"))}
+        for env in ("CartPole-v1", "Acrobot-v1")
+        for arm in ("twoda2c", "a2c")
+        for seed in (1, 0)
+    ]
+    text = report(rows, [load_spec("CartPole-v1"), load_spec("Acrobot-v1")], tmp_path)
+    assert text.count("| a2c | 0.0, -10.0 | -5.0 [") == 2 and text.count("| twoda2c | -1.0, -11.0 |") == 2
+    assert text.index("| CartPole-v1 |") < text.index("| Acrobot-v1 |") and "minus a2c" in text
+    with pytest.raises(ValueError, match="task 'Acrobot-v1' is none of the specs' tasks"):
+        report(rows, load_spec("CartPole-v1"), tmp_path)
