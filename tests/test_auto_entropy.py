@@ -2,14 +2,17 @@
 
 import inspect
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 import torch as th
+import yaml
 from gymnasium import spaces
 from stable_baselines3 import A2C, PPO
 from stable_baselines3.common.envs import IdentityEnv, IdentityEnvMultiDiscrete
 
+import twodrl_bench
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
 from twodrl_bench.auto_entropy import (
     AUTO_ENTROPY_ALGOS,
@@ -177,3 +180,29 @@ def test_a_fixed_coefficient_learns_nothing_and_logs_nothing_more() -> None:
     assert model.log_ent_coef_ratio is None and model.ent_coef == 0.05
     assert "train/ent_coef" not in model.logger.name_to_value
     assert np.isfinite(model.logger.name_to_value["train/entropy_loss"])
+
+
+def test_the_studys_specs_name_their_paths_and_known_algorithms() -> None:
+    """Each spec of the study is named by its path, runs seeds 400-409, and gives every automatic arm a
+    valid target; its algorithms are the stock, 2D-RL or automatic ones."""
+    root = Path(twodrl_bench.__file__).parent / "specs"
+    paths = sorted((root / "auto_entropy").glob("*.yml"))
+    assert [p.stem for p in paths] == [
+        "CliffWalking",
+        "LavaGap",
+        "LunarLander",
+        "LunarLander_ppo",
+        "NomadOffice-v0",
+        "NomadOffice-v0_ppo",
+    ]
+    for path in paths:
+        spec = yaml.safe_load(path.read_text())
+        assert spec["name"] == str(path.relative_to(root).with_suffix(""))
+        assert spec["seeds"] == list(range(400, 410))
+        for arm in spec["arms"].values():
+            assert arm["algo"] in {"a2c", "ppo", "twoda2c", "twodppo", *AUTO_ENTROPY_ALGOS}
+            if arm["algo"] in AUTO_ENTROPY_ALGOS:
+                assert arm["override"]["ent_coef"] == "auto"
+                assert arm["override"]["target_entropy_fraction"] in (0.98, 0.5)
+        rules = spec["rules"]
+        assert {rules["claim"], *rules["against"], rules["zero"]} <= set(spec["arms"])
