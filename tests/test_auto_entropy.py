@@ -23,6 +23,7 @@ from twodrl_bench.auto_entropy import (
     AutoEntropyTwoDimPPO,
     max_entropy,
 )
+from twodrl_bench.checkpoint import load_checkpoint, save_checkpoint, set_rng_state
 
 PPO_ARGS = dict(n_steps=32, batch_size=16, n_epochs=2)
 AUTO = [(AutoEntropyA2C, {}), (AutoEntropyPPO, PPO_ARGS), (AutoEntropyTwoDimA2C, {}), (AutoEntropyTwoDimPPO, PPO_ARGS)]
@@ -111,19 +112,35 @@ def test_at_a_fixed_coefficient_a_seeded_run_is_the_stock_algorithms_bitwise(
     assert actual.ent_coef == coefficient
 
 
-def test_save_and_load_keep_the_learned_coefficient(tmp_path) -> None:
-    model = AutoEntropyA2C(
-        "MlpPolicy", IdentityEnv(4), target_entropy_fraction=0.5, ent_coef_lr=0.01, seed=1, device="cpu"
-    )
+@pytest.mark.parametrize("algo", [AutoEntropyA2C, AutoEntropyTwoDimA2C])
+def test_save_and_load_keep_the_learned_coefficient(algo, tmp_path) -> None:
+    model = algo("MlpPolicy", IdentityEnv(4), target_entropy_fraction=0.5, ent_coef_lr=0.01, seed=1, device="cpu")
     model.learn(100)
     model.save(tmp_path / "model.zip")
-    loaded = AutoEntropyA2C.load(tmp_path / "model.zip", device="cpu")
+    loaded = algo.load(tmp_path / "model.zip", device="cpu")
     assert th.equal(loaded.log_ent_coef_ratio, model.log_ent_coef_ratio)
     assert loaded.log_ent_coef_ratio.item() < 0.0
     assert loaded.ent_coef_optimizer.param_groups[0]["params"][0] is loaded.log_ent_coef_ratio
     exp_avg = loaded.ent_coef_optimizer.state_dict()["state"][0]["exp_avg"]
     assert th.equal(exp_avg, model.ent_coef_optimizer.state_dict()["state"][0]["exp_avg"])
     assert (loaded.target_entropy, loaded.ent_coef_init) == (model.target_entropy, 1.0)
+
+
+@pytest.mark.parametrize("algo, kwargs", [(AutoEntropyA2C, {}), (AutoEntropyTwoDimPPO, PPO_ARGS)])
+def test_a_run_resumed_from_a_checkpoint_learns_what_an_uninterrupted_one_does(algo, kwargs, tmp_path) -> None:
+    """The bench's checkpoints (twodrl_bench.checkpoint) carry the coefficient and its optimizer."""
+    model = algo(
+        "MlpPolicy", "CartPole-v1", target_entropy_fraction=0.5, ent_coef_lr=0.01, seed=5, device="cpu", **kwargs
+    )
+    model.learn(128)
+    save_checkpoint(tmp_path / "run.pkl", model, {})
+    model.learn(128, reset_num_timesteps=False)
+    resumed, rng, _ = load_checkpoint(tmp_path / "run.pkl")
+    set_rng_state(rng)
+    resumed.learn(128, reset_num_timesteps=False)
+    _assert_same_parameters(model.policy, resumed.policy)
+    assert th.equal(resumed.log_ent_coef_ratio, model.log_ent_coef_ratio)
+    assert resumed.ent_coef_optimizer.param_groups[0]["params"][0] is resumed.log_ent_coef_ratio
 
 
 def test_the_target_is_a_fraction_of_the_maximum_entropy() -> None:

@@ -53,7 +53,7 @@ from twodrl_bench.baselines import BatchedA2C, BatchedPPO
 
 TARGET_FRACTION = 0.98
 """The default target, as a fraction of the maximum entropy: SAC-Discrete's ``0.98 * -log(1/|A|)``
-(Christodoulou 2019, section 4 and its code)."""
+(Christodoulou 2019, arXiv:1910.07207)."""
 
 
 def max_entropy(action_space: spaces.Space) -> float:
