@@ -1,0 +1,288 @@
+"""The bench's self-tuning entropy arms: A2C, PPO, TwoDimA2C and TwoDimPPO with SAC's ``ent_coef="auto"``.
+
+Stock A2C and PPO add ``ent_coef * H(pi(.|s))`` to their objective at a coefficient set by hand. SAC
+(Haarnoja et al. 2018, "Soft Actor-Critic Algorithms and Applications", section 5) learns it instead:
+the coefficient ``alpha`` is a Lagrange multiplier of the constraint ``H >= H_target``, one gradient step
+on ``log alpha`` per gradient step of the algorithm, on the loss ``-log(alpha) * (H_target - H)`` averaged
+over the batch (SB3's ``sac/sac.py`` with ``ent_coef="auto"``; for discrete actions the exact entropy of
+each state's distribution, Christodoulou 2019, "Soft Actor-Critic for Discrete Action Settings",
+arXiv:1910.07207). So alpha grows while the policy's entropy is below the target and shrinks while above.
+
+The target is a fraction of the action space's maximum entropy (:func:`max_entropy`): ``log |A|`` for
+``Discrete``, ``sum(log n_i)`` for ``MultiDiscrete`` (SB3's distribution is a product of independent
+categoricals, its entropy the sum), ``n log 2`` for ``MultiBinary``. ``Box`` is refused: a Gaussian's
+entropy has no maximum, so no fraction of it is a target (SAC's ``-dim(A)`` is not offered here).
+
+As in SAC, the coefficient starts at 1 (``"auto_<x>"``: at ``x``) and its optimizer is Adam at the
+algorithm's learning rate, following its schedule. The coefficient each batch's loss uses is alpha
+before that batch's step on it (SAC's order). It is kept as ``ent_coef_init * exp(log_ent_coef_ratio)``
+with the learned ``log_ent_coef_ratio = log(alpha / ent_coef_init)`` starting at 0 (the same Adam steps
+as on ``log alpha``), so that with ``ent_coef_lr=0`` the coefficient is ``ent_coef_init`` exactly and a
+seeded run is the stock algorithm's at that fixed coefficient, bit for bit. A float ``ent_coef`` is a fixed
+coefficient: the class is then the stock algorithm.
+
+On TwoDimA2C and TwoDimPPO the entropy that drives alpha is that of the tempered policy that acts
+(eq. 9, the distribution that drew each action, at the temperature it was drawn at): it is the entropy
+whose gradient the algorithms' entropy term already follows
+(:meth:`~sb3_twodrl.common.policies.TwoDimPolicyMixin.evaluate_actions_two_dim`), and a Lagrange
+multiplier must watch the constrained quantity that the term it weights pushes. It also makes the
+arm the question it is run for: exploration the interest already gives (a high temperature) counts
+toward the target, so alpha adds a bonus only where the interest's exploration falls short. (The 2D
+classes never draw uniformly: ``1/T >= 1/max_temperature > 0``, so every entropy of the batch counts.)
+
+Each ``train`` logs ``train/ent_coef`` (mean of the coefficients used), ``train/ent_coef_loss`` and
+``train/entropy`` (mean entropy of the batches that drove alpha) beside the algorithm's own keys.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import inspect
+import math
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import numpy as np
+import torch as th
+from gymnasium import spaces
+from stable_baselines3.common.utils import update_learning_rate
+
+from sb3_twodrl import TwoDimA2C, TwoDimPPO
+from sb3_twodrl.common.validation import check_non_negative, is_real
+from twodrl_bench.baselines import BatchedA2C, BatchedPPO
+
+TARGET_FRACTION = 0.98
+"""The default target, as a fraction of the maximum entropy: SAC-Discrete's ``0.98 * -log(1/|A|)``
+(Christodoulou 2019, arXiv:1910.07207)."""
+
+
+def max_entropy(action_space: spaces.Space) -> float:
+    """The largest entropy a policy over ``action_space`` can have (the uniform policy's).
+
+    :raises ValueError: for a ``Box`` or any other space without one
+    """
+    if isinstance(action_space, spaces.Discrete):
+        return math.log(int(action_space.n))
+    if isinstance(action_space, spaces.MultiDiscrete):
+        return float(np.log(action_space.nvec.astype(np.float64)).sum())
+    if isinstance(action_space, spaces.MultiBinary):
+        return float(np.prod(action_space.shape)) * math.log(2.0)
+    raise ValueError(
+        f"action_space must be Discrete, MultiDiscrete or MultiBinary, got {action_space!r}: the target entropy "
+        "is a fraction of the maximum entropy, which a Gaussian policy over a Box has not"
+    )
+
+
+def parse_ent_coef(ent_coef: float | str) -> tuple[bool, float]:
+    """``(learned, initial value)`` of an ``ent_coef`` argument: ``"auto"`` (learned from 1, SAC's default),
+    ``"auto_<x>"`` (learned from ``x > 0``) or a fixed coefficient ``>= 0``.
+
+    :raises ValueError: naming ``ent_coef`` and its value otherwise
+    """
+    if isinstance(ent_coef, str):
+        head, _, init = ent_coef.partition("_")
+        value = math.nan
+        if head == "auto":
+            with contextlib.suppress(ValueError):
+                value = float(init) if init else 1.0
+        if not (math.isfinite(value) and value > 0.0):
+            raise ValueError(f'ent_coef must be "auto", "auto_<initial value > 0>" or a float >= 0, got {ent_coef!r}')
+        return True, value
+    check_non_negative("ent_coef", ent_coef)
+    return False, float(ent_coef)
+
+
+class AutoEntropyMixin:
+    """SAC's learned entropy coefficient on an SB3 on-policy algorithm; goes before the algorithm's class.
+
+    The entropy of each gradient step's batch reaches :meth:`_tune_ent_coef` through
+    :meth:`_observing_entropy` (stock algorithms) or the algorithm's ``_evaluate_actions`` (2D-RL).
+    """
+
+    # The algorithm's attributes that the mixin uses
+    action_space: spaces.Space
+    device: th.device
+    ent_coef: float
+    lr_schedule: Callable[[float], float]
+    logger: Any
+    policy: Any
+    _current_progress_remaining: float
+
+    def _init_auto_entropy(
+        self, ent_coef: float | str, target_entropy_fraction: float, ent_coef_lr: float | None
+    ) -> float:
+        """Validate and store the arguments; returns the initial coefficient."""
+        self.ent_coef_auto, self.ent_coef_init = parse_ent_coef(ent_coef)
+        if not (is_real(target_entropy_fraction) and 0.0 < target_entropy_fraction <= 1.0):
+            raise ValueError(f"target_entropy_fraction must be in (0, 1], got {target_entropy_fraction!r}")
+        if ent_coef_lr is not None:
+            check_non_negative("ent_coef_lr", ent_coef_lr)
+        self.target_entropy_fraction = target_entropy_fraction
+        self.ent_coef_lr = ent_coef_lr
+        self.target_entropy: float | None = None
+        self.log_ent_coef_ratio: th.Tensor | None = None
+        self.ent_coef_optimizer: th.optim.Adam | None = None
+        self._ent_coef_stats: list[tuple[float, float, float]] = []
+        return self.ent_coef_init
+
+    def _setup_model(self) -> None:
+        if self.ent_coef_auto:
+            self.target_entropy = self.target_entropy_fraction * max_entropy(self.action_space)
+        super()._setup_model()  # type: ignore[misc]
+        if self.ent_coef_auto:
+            self.log_ent_coef_ratio = th.zeros(1, device=self.device, requires_grad=True)
+            self.ent_coef_optimizer = th.optim.Adam([self.log_ent_coef_ratio], lr=self._ent_coef_learning_rate())
+
+    def _ent_coef_learning_rate(self) -> float:
+        """``ent_coef_lr``, or the algorithm's learning rate now (SAC: the same schedule as the networks')."""
+        if self.ent_coef_lr is not None:
+            return self.ent_coef_lr
+        return self.lr_schedule(self._current_progress_remaining)
+
+    def _tune_ent_coef(self, entropy: th.Tensor) -> None:
+        """Set ``ent_coef`` to the current alpha for this batch's loss, then take alpha's step on the batch's
+        entropies: loss ``-log(alpha) * (H_target - H)``, averaged."""
+        assert self.log_ent_coef_ratio is not None and self.ent_coef_optimizer is not None
+        assert self.target_entropy is not None
+        self.ent_coef = self.ent_coef_init * math.exp(self.log_ent_coef_ratio.item())
+        entropy = entropy.detach()
+        log_ent_coef = math.log(self.ent_coef_init) + self.log_ent_coef_ratio
+        loss = -(log_ent_coef * (self.target_entropy - entropy)).mean()
+        self.ent_coef_optimizer.zero_grad()
+        loss.backward()
+        self.ent_coef_optimizer.step()
+        self._ent_coef_stats.append((self.ent_coef, loss.item(), entropy.mean().item()))
+
+    def _observing_entropy(self) -> contextlib.AbstractContextManager[None]:
+        """While ``train`` runs: pass each gradient step's entropy to :meth:`_tune_ent_coef` (default: nothing)."""
+        return contextlib.nullcontext()
+
+    def train(self) -> None:
+        if not self.ent_coef_auto:
+            super().train()  # type: ignore[misc]
+            return
+        assert self.ent_coef_optimizer is not None
+        update_learning_rate(self.ent_coef_optimizer, self._ent_coef_learning_rate())
+        self._ent_coef_stats = []
+        with self._observing_entropy():
+            super().train()  # type: ignore[misc]
+        coefficients, losses, entropies = zip(*self._ent_coef_stats, strict=True)
+        self.logger.record("train/ent_coef", float(np.mean(coefficients)))
+        self.logger.record("train/ent_coef_loss", float(np.mean(losses)))
+        self.logger.record("train/entropy", float(np.mean(entropies)))
+
+    def _get_torch_save_params(self) -> tuple[list[str], list[str]]:
+        state_dicts, variables = super()._get_torch_save_params()  # type: ignore[misc]
+        if self.ent_coef_auto:
+            return [*state_dicts, "ent_coef_optimizer"], [*variables, "log_ent_coef_ratio"]
+        return state_dicts, variables
+
+    def _excluded_save_params(self) -> list[str]:
+        return [*super()._excluded_save_params(), "_ent_coef_stats"]  # type: ignore[misc]
+
+
+class _StockAutoEntropyMixin(AutoEntropyMixin):
+    """For SB3's A2C and PPO, whose ``train`` asks ``policy.evaluate_actions`` for each batch's entropy."""
+
+    @contextlib.contextmanager
+    def _observing_entropy(self) -> Iterator[None]:
+        policy = self.policy
+        evaluate = policy.evaluate_actions
+
+        def evaluate_and_tune(obs: Any, actions: th.Tensor) -> tuple[th.Tensor, th.Tensor, th.Tensor | None]:
+            values, log_prob, entropy = evaluate(obs, actions)
+            self._tune_ent_coef(entropy)  # never None: the spaces with a maximum entropy have it in closed form
+            return values, log_prob, entropy
+
+        policy.evaluate_actions = evaluate_and_tune
+        try:
+            yield
+        finally:
+            del policy.evaluate_actions
+
+
+class _TwoDimAutoEntropyMixin(AutoEntropyMixin):
+    """For TwoDimA2C and TwoDimPPO, whose ``train`` asks ``_evaluate_actions``: alpha follows the entropy of the
+    tempered policy that acts (eq. 9), the one their entropy term pushes."""
+
+    def _evaluate_actions(
+        self, observations: Any, actions: th.Tensor, inverse_temperatures: th.Tensor
+    ) -> tuple[th.Tensor, th.Tensor, th.Tensor | None, th.Tensor, th.Tensor | None]:
+        out = super()._evaluate_actions(observations, actions, inverse_temperatures)  # type: ignore[misc]
+        if self.ent_coef_auto:
+            self._tune_ent_coef(out[4])
+        return out
+
+
+def _init_with_auto_entropy(base: type) -> Callable[..., None]:
+    """``base.__init__`` with ``ent_coef`` defaulting to ``"auto"`` and the keyword arguments
+    ``target_entropy_fraction`` and ``ent_coef_lr``; its signature says so (the bench records the defaults)."""
+    signature = inspect.signature(base.__init__)
+    parameters = [
+        p.replace(default="auto", annotation="float | str") if p.name == "ent_coef" else p
+        for p in signature.parameters.values()
+    ]
+    keyword = inspect.Parameter.KEYWORD_ONLY
+    parameters += [
+        inspect.Parameter("target_entropy_fraction", keyword, default=TARGET_FRACTION, annotation="float"),
+        inspect.Parameter("ent_coef_lr", keyword, default=None, annotation="float | None"),
+    ]
+    signature = signature.replace(parameters=parameters)
+
+    def __init__(self: AutoEntropyMixin, *args: Any, **kwargs: Any) -> None:
+        arguments = signature.bind(self, *args, **kwargs)
+        arguments.apply_defaults()
+        given = dict(arguments.arguments)
+        del given["self"]
+        ent_coef = self._init_auto_entropy(
+            given.pop("ent_coef"), given.pop("target_entropy_fraction"), given.pop("ent_coef_lr")
+        )
+        base.__init__(self, ent_coef=ent_coef, **given)
+
+    __init__.__signature__ = signature  # type: ignore[attr-defined]
+    return __init__
+
+
+class AutoEntropyA2C(_StockAutoEntropyMixin, BatchedA2C):
+    """SB3's ``A2C`` (the bench's :class:`~twodrl_bench.baselines.BatchedA2C`) with SAC's learned entropy
+    coefficient (:mod:`twodrl_bench.auto_entropy`). Every other argument is ``A2C``'s.
+
+    :param ent_coef: ``"auto"`` (learned, from 1), ``"auto_<x>"`` (learned, from ``x``) or a fixed coefficient
+    :param target_entropy_fraction: the target entropy as a fraction of the maximum, in (0, 1]
+    :param ent_coef_lr: the coefficient's Adam learning rate; None: the algorithm's (its schedule, as SAC)
+    """
+
+    __init__ = _init_with_auto_entropy(BatchedA2C)
+
+
+class AutoEntropyPPO(_StockAutoEntropyMixin, BatchedPPO):
+    """SB3's ``PPO`` (the bench's :class:`~twodrl_bench.baselines.BatchedPPO`) with SAC's learned entropy
+    coefficient, one step of it per minibatch. ``ent_coef``, ``target_entropy_fraction`` and ``ent_coef_lr``
+    as :class:`AutoEntropyA2C`'s; every other argument is ``PPO``'s."""
+
+    __init__ = _init_with_auto_entropy(BatchedPPO)
+
+
+class AutoEntropyTwoDimA2C(_TwoDimAutoEntropyMixin, TwoDimA2C):
+    """``TwoDimA2C`` with SAC's learned entropy coefficient, driven by the entropy of the tempered policy
+    that acts (eq. 9). ``ent_coef``, ``target_entropy_fraction`` and ``ent_coef_lr`` as
+    :class:`AutoEntropyA2C`'s; every other argument is ``TwoDimA2C``'s."""
+
+    __init__ = _init_with_auto_entropy(TwoDimA2C)
+
+
+class AutoEntropyTwoDimPPO(_TwoDimAutoEntropyMixin, TwoDimPPO):
+    """``TwoDimPPO`` with SAC's learned entropy coefficient, driven by the entropy of the tempered policy
+    that acts (eq. 9), one step of it per minibatch. ``ent_coef``, ``target_entropy_fraction`` and
+    ``ent_coef_lr`` as :class:`AutoEntropyA2C`'s; every other argument is ``TwoDimPPO``'s."""
+
+    __init__ = _init_with_auto_entropy(TwoDimPPO)
+
+
+AUTO_ENTROPY_ALGOS: dict[str, type] = {
+    "a2c_auto": AutoEntropyA2C,
+    "ppo_auto": AutoEntropyPPO,
+    "twoda2c_auto": AutoEntropyTwoDimA2C,
+    "twodppo_auto": AutoEntropyTwoDimPPO,
+}
+"""The self-tuning arms by the bench's names (``<algo>_auto`` reads ``<algo>``'s settings)."""
