@@ -19,8 +19,8 @@ from pathlib import Path
 from typing import Any
 
 from twodrl_bench.checkpoint import atomic_write_bytes
+from twodrl_bench.epochs import Row, checkpoint_path, progress_path, run_pair
 from twodrl_bench.protocol import COLUMNS, RunSpec
-from twodrl_bench.runner import Row, checkpoint_path, progress_path, run_pair
 
 BACKENDS = ("process", "ray", "serial")
 

@@ -26,9 +26,9 @@ import torch as th
 from stable_baselines3.common.base_class import BaseAlgorithm
 
 from twodrl_bench.algos import ALGOS, algo_class
+from twodrl_bench.epochs import model_path
 from twodrl_bench.intervals import mean_ci, wilson
 from twodrl_bench.protocol import parse_env_kwargs
-from twodrl_bench.runner import model_path
 from twodrl_bench.trials import tally, trial_outcomes
 from twodrl_bench.vec_env import make_test_env, make_train_env
 
