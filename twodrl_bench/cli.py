@@ -1,6 +1,6 @@
 """``sb3-twodrl-bench``: run a study's spec, report a study, show the state of run folders.
 
-    sb3-twodrl-bench run SPEC [--out DIR] [--backend process|ray|serial] [--address ADDR] [--workers N]
+    sb3-twodrl-bench run SPEC [--out DIR] [--backend process|ray|serial] [--address ADDR] [--workers N] [--arms A ..]
     sb3-twodrl-bench report STUDY [--runs DIR] [--out DIR]
     sb3-twodrl-bench status [DIR]
 
@@ -29,6 +29,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     run.add_argument("--backend", choices=BACKENDS, default="process", help="where jobs run (default: %(default)s)")
     run.add_argument("--address", help="a Ray cluster to join (HOST:PORT or 'auto'; default: a local Ray instance)")
     run.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="jobs at a time (default: CPU count)")
+    run.add_argument("--arms", nargs="+", help="run only these arms of the spec (default: every arm)")
     run.add_argument("--no-report", action="store_true", help="do not run the report at the end")
     report = sub.add_parser("report", help="the report of a study from its run folders")
     report.add_argument("study", help="a study's name (quick_preset, paper_preset, factorial, ...)")
@@ -71,7 +72,7 @@ def main(argv: list[str] | None = None) -> None:
     if args.command == "run":
         from twodrl_bench.runner import run_study
 
-        run_study(args.spec, args.out, args.backend, args.workers, args.address, report=not args.no_report)
+        run_study(args.spec, args.out, args.backend, args.workers, args.address, not args.no_report, args.arms)
     elif args.command == "report":
         from twodrl_bench.reports import report_study
 

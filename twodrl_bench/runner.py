@@ -128,8 +128,11 @@ def run_study(
     workers: int | None = None,
     address: str | None = None,
     report: bool = True,
+    arms: list[str] | None = None,
 ) -> Path:
     """Run (or resume) every job of ``spec`` (a packaged name, a path or a spec mapping) into ``out``; the folder.
+
+    ``arms``: run only these arms' jobs (the folder's spec still records every arm of ``spec``).
 
     Each finished job's rows are written at once; at the end ``rows.csv`` collects them and, with
     ``report``, the study's report (:func:`twodrl_bench.reports.report_study`) reads the run folders.
@@ -141,8 +144,11 @@ def run_study(
     atomic_write_bytes(folder / "machine.json", json.dumps(machine_info(), indent=1).encode())
     for package in resolved["gym_packages"]:
         importlib.import_module(package)
-    jobs = pending_jobs(resolved, folder)
-    total = len(resolved["arms"]) * len(resolved["seeds"])
+    unknown = sorted(set(arms or []) - set(resolved["arms"]))
+    if unknown:
+        raise ValueError(f"arms must be among the spec's {list(resolved['arms'])}, got {unknown}")
+    jobs = pending_jobs(resolved, folder, arms)
+    total = len(arms or resolved["arms"]) * len(resolved["seeds"])
     if len(jobs) < total:
         print(f"resuming {folder}: {total - len(jobs)} of {total} jobs already finished")
     done = [total - len(jobs)]

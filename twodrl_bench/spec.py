@@ -5,7 +5,8 @@ A spec is packaged as ``twodrl_bench/specs/<study>.yml`` or, for a study of seve
 ``twodrl_bench/specs/<study>/<part>.yml``; its name is that path without ``.yml``. Fields
 (``docs/studies.md``): ``name``, ``env``, ``env_kwargs`` ({}), ``gym_packages`` ([envs]), ``protocol``
 (the paper's epochs ``{epochs, learn_episodes, test_episodes}`` or ``{timesteps, eval_episodes}``),
-``seeds``, ``arms`` (name -> ``{algo, override, settings}``) or ``grid`` (points that expand into arms),
+``seeds``, ``arms`` (name -> ``{algo, override, settings}``) and/or ``grid`` (points that expand into arms,
+kept in the spec for the report),
 ``rules`` (free-form, read by the report) and ``report`` (a module of :mod:`twodrl_bench.reports`).
 
 *Resolving* a spec reads each arm's settings (the env's entry of ``<algo>.yml``, packaged or in the
@@ -130,7 +131,7 @@ def validate(raw: Any, source: str = "spec") -> Spec:
         raise _fail(source, "seeds", "must not repeat a seed", seeds)
     arms = dict(_mapping(source, "arms", spec.get("arms") or {}))
     if "grid" in spec:
-        for name, arm in _expand_grid(source, spec.pop("grid")).items():
+        for name, arm in _expand_grid(source, spec["grid"]).items():
             if name in arms:
                 raise _fail(source, "grid", f"expands into the arm {name!r}, which arms already has", name)
             arms[name] = arm
