@@ -207,3 +207,13 @@ def test_a_long_cell_short_of_seeds_has_no_rule_read(tmp_path: Path) -> None:
     for text in (factorial.verdicts(cells), factorial.paper_result(cells)):
         line = text.splitlines()[2]
         assert "not read (3 and 2 of 10 seeds)" in line and "True" not in line and "False" not in line
+
+
+def test_every_packaged_cell_states_the_registered_rules() -> None:
+    from twodrl_bench.reports import Part
+    from twodrl_bench.spec import load_spec, packaged_specs
+
+    cells = [load_spec(name) for name in packaged_specs() if name.startswith("factorial/")]
+    assert len(cells) == 6
+    parts = [Part(spec["name"], spec["name"].split("/")[1], spec, pd.DataFrame(), Path()) for spec in cells]
+    assert factorial.check_rules(parts) == [20]

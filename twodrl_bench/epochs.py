@@ -10,7 +10,9 @@ Every ``checkpoint_every`` epochs, at the next rollout start (a clean boundary: 
 last rollout done, the buffer empty), the run is checkpointed (:mod:`.checkpoint`) together with
 its rows so far; a run that finds a checkpoint of its protocol continues from it and produces the
 rows an uninterrupted run produces (``wall_s`` aside, which adds the time before the interruption).
-At the end the model is saved (``models/<arm>_seed<seed>.zip``, loadable by ``<Algo>.load``).
+At the end the model is saved (``models/<arm>_seed<seed>.zip``, loadable by ``<Algo>.load``). With a
+``transfer`` protocol key (paper section 3.5) the saved policy then runs deterministic trials on another
+env (:func:`transfer_columns`), reported in the last epoch's row.
 
 :func:`run_job` is the study runner's entry (:mod:`twodrl_bench.runner`): plain data in, rows out.
 """
@@ -36,10 +38,16 @@ from sb3_twodrl.callbacks import NavigationMetricsCallback
 from twodrl_bench.algos import algo_class
 from twodrl_bench.checkpoint import load_checkpoint, save_checkpoint, set_rng_state
 from twodrl_bench.protocol import LEARNING, METRICS, RunSpec, trial_seed
-from twodrl_bench.trials import run_test_trials
+from twodrl_bench.trials import run_test_trials, tally, trial_outcomes
 from twodrl_bench.vec_env import make_test_env, make_train_env
 
 Row = dict[str, Any]
+PAPER_TRIALS = 10
+"""Trials on the real robot per policy in the paper (section 3.5): the first of a transfer's trials."""
+TRANSFER_SEED = 1_000_003
+"""The held-out seed of a transfer's trials (sub-env ``i`` seeded ``seed + i``); its own env's: ``seed + 10**4``."""
+OWN_TRIALS = 10
+"""Trials of a transferred policy in its own training env (did it learn at all?)."""
 
 
 def checkpoint_path(out_dir: str | Path, name: str) -> Path:
@@ -211,6 +219,35 @@ def run_job(
         label=arm["name"],
     )
     rows = [{"arm": arm["name"], **row} for row in run_pair(spec)]
+    if protocol.get("transfer"):
+        model = algo_class(spec.algo).load(model_path(out_dir, spec.name), device="cpu")
+        rows[-1].update(transfer_columns(model, env, dict(env_kwargs), protocol["transfer"]))
     checkpoint_path(out_dir, spec.name).unlink(missing_ok=True)
     progress_path(out_dir, spec.name).unlink(missing_ok=True)
     return rows
+
+
+def _outcomes(model: BaseAlgorithm, env_id: str, n: int, seed: int, env_kwargs: dict[str, Any]) -> list[str]:
+    """Outcomes of ``n`` deterministic trials on ``env_id`` (sub-env ``i`` seeded ``seed + i``)."""
+    env = make_test_env(env_id, n, env_kwargs=env_kwargs)
+    try:
+        return trial_outcomes(model, env, seed)
+    finally:
+        env.close()
+
+
+def transfer_columns(model: BaseAlgorithm, env: str, env_kwargs: dict[str, Any], transfer: dict[str, Any]) -> Row:
+    """Paper section 3.5: ``transfer["trials"]`` deterministic trials of ``model`` on ``transfer["env"]`` (the
+    first :data:`PAPER_TRIALS` are the paper's) and :data:`OWN_TRIALS` on its training env, counted by outcome;
+    ``env_kwargs`` go to both envs (``observe_odometry: False``: sensors only)."""
+    seed = transfer.get("seed", TRANSFER_SEED)
+    own = tally(_outcomes(model, env, OWN_TRIALS, seed + 10**4, env_kwargs))
+    outcomes = _outcomes(model, transfer["env"], transfer["trials"], seed, env_kwargs)
+    target = tally(outcomes)
+    return {
+        "transfer_env": transfer["env"],
+        "transfer_trials": transfer["trials"],
+        "transfer_paper_successes": tally(outcomes[:PAPER_TRIALS])["success"],
+        **{f"transfer_{key}": value for key, value in target.items()},
+        "own_env_success": own["success"] / OWN_TRIALS,
+    }

@@ -157,10 +157,7 @@ def _protocol(source: str, protocol: Any) -> dict[str, Any]:
         if out["transfer"] is None:
             del out["transfer"]
         else:
-            transfer = _mapping(source, "protocol.transfer", out["transfer"])
-            if set(transfer) != {"env", "trials"} or not isinstance(transfer["env"], str):
-                raise _fail(source, "protocol.transfer", "must be {env: <Gymnasium ID>, trials: <int>}", transfer)
-            _positive_int(source, "protocol.transfer.trials", transfer["trials"])
+            out["transfer"] = _transfer(source, out["transfer"], out["save_model"])
         return out
     if all(key in protocol for key in TIMESTEPS_REQUIRED):
         if protocol["timesteps"] is not None:
@@ -170,6 +167,23 @@ def _protocol(source: str, protocol: Any) -> dict[str, Any]:
     raise _fail(
         source, "protocol", "must be {epochs, learn_episodes, test_episodes} or {timesteps, eval_episodes}", protocol
     )
+
+
+def _transfer(source: str, transfer: Any, save_model: bool) -> dict[str, Any]:
+    """``{env, trials, seed}`` of a transfer (seed defaults to the held-out one), checked."""
+    from twodrl_bench.epochs import PAPER_TRIALS, TRANSFER_SEED
+
+    key = "protocol.transfer"
+    transfer = dict(_mapping(source, key, transfer))
+    if not {"env", "trials"} <= set(transfer) <= {"env", "trials", "seed"} or not isinstance(transfer["env"], str):
+        raise _fail(source, key, "must be {env: <Gymnasium ID>, trials: <int>, seed: <int>}", transfer)
+    if _positive_int(source, f"{key}.trials", transfer["trials"]) < PAPER_TRIALS:
+        raise _fail(source, f"{key}.trials", f"must be at least the paper's {PAPER_TRIALS}", transfer["trials"])
+    transfer.setdefault("seed", TRANSFER_SEED)
+    _positive_int(source, f"{key}.seed", transfer["seed"], zero=True)
+    if not save_model:
+        raise _fail(source, "protocol.save_model", "must be true with a transfer (its trials load the model)", False)
+    return transfer
 
 
 def _arm(source: str, name: Any, arm: Any) -> dict[str, Any]:
