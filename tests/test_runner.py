@@ -118,8 +118,9 @@ def test_a_run_folder_holds_the_resolved_spec_machine_rows_models_and_logs(toy_r
     assert stored["arms"]["a2c"]["hyperparams"]["n_envs"] == 2
     assert stored["arms"]["a2c"]["hyperparams"]["gamma"] == 0.9
     assert "ent_coef" in stored["arms"]["a2c"]["hyperparams"] and "vf_coef" in stored["arms"]["a2c"]["defaults"]
-    machine = json.loads((toy_run / "machine.json").read_text())
+    (machine,) = json.loads((toy_run / "machine.json").read_text())  # four jobs, one machine
     assert machine["packages"]["torch"] and machine["torch"]["cpu_capability"] and "MKL_CBWR" in machine["env"]
+    assert machine["torch"]["threads"] == 1  # as the epoch jobs ran
     df = pd.read_csv(toy_run / "rows.csv")
     assert list(df.columns[:3]) == ["arm", "env", "algo"]
     assert len(df) == 2 * 2 * 3 and set(df["epoch"]) == {1, 2, 3}

@@ -6,7 +6,7 @@ the protocol: :func:`twodrl_bench.epochs.run_job` (the paper's epochs) or
 ``run_job(arm, env, env_kwargs, protocol, seed, out_dir, gym_packages) -> rows``.
 
 The run folder (default ``runs/<spec name>``) holds ``spec.yml`` (the resolved spec), ``machine.json``
-(:func:`twodrl_bench.machine.machine_info` of the machine that ran the study), ``rows/<arm>_seed<seed>.csv``
+(:func:`record_machine`: the machines its jobs ran on), ``rows/<arm>_seed<seed>.csv``
 per finished job (written atomically: a job with a file is done), ``rows.csv`` (every job's rows),
 and what the jobs keep: ``checkpoints/`` (a job without rows resumes from its checkpoint), ``progress/``,
 ``models/`` and ``tb/``. Running a spec into a folder whose stored spec differs in what decides the rows
@@ -28,7 +28,6 @@ import yaml
 
 from twodrl_bench.backends import run_jobs
 from twodrl_bench.checkpoint import atomic_write_bytes
-from twodrl_bench.machine import machine_info
 from twodrl_bench.spec import Spec, dump, guard_diff, load_spec, merge, resolve, validate
 
 Row = dict[str, Any]
@@ -117,6 +116,19 @@ def collect(folder: str | Path):
     return df
 
 
+def record_machine(folder: str | Path, info: dict[str, Any]) -> list[dict[str, Any]]:
+    """Add ``info`` (:func:`~twodrl_bench.machine.machine_info` of a job's process) to ``machine.json``, the list
+    of the distinct machines whose jobs ran into ``folder``, in order of first use (their rows may differ bitwise)."""
+    path = Path(folder) / "machine.json"
+    machines = json.loads(path.read_text()) if path.is_file() else []
+    if info not in machines:
+        if machines:
+            print(f"{folder}: jobs ran on another machine than before (machine.json lists each)")
+        machines.append(info)
+        atomic_write_bytes(path, json.dumps(machines, indent=1).encode())
+    return machines
+
+
 def default_folder(name: str) -> Path:
     return Path("runs") / name
 
@@ -141,7 +153,6 @@ def run_study(
     folder = Path(out) if out is not None else default_folder(resolved["name"])
     folder.mkdir(parents=True, exist_ok=True)
     guard(folder, resolved)
-    atomic_write_bytes(folder / "machine.json", json.dumps(machine_info(), indent=1).encode())
     for package in resolved["gym_packages"]:
         importlib.import_module(package)
     unknown = sorted(set(arms or []) - set(resolved["arms"]))
@@ -153,8 +164,9 @@ def run_study(
         print(f"resuming {folder}: {total - len(jobs)} of {total} jobs already finished")
     done = [total - len(jobs)]
 
-    def on_done(job: dict[str, Any], rows: list[Row]) -> None:
+    def on_done(job: dict[str, Any], rows: list[Row], machine: dict[str, Any]) -> None:
         write_rows(rows_path(folder, job["arm"]["name"], job["seed"]), rows)
+        record_machine(folder, machine)
         done[0] += 1
         print(f"[{done[0]}/{total}] {job['arm']['name']} seed {job['seed']}: {len(rows)} rows", flush=True)
 
