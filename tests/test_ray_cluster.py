@@ -2,9 +2,9 @@
 
 A head node (``ray start --head --block``, 2 CPUs, its own temporary folder and free ports) runs in a
 process group of its own; the study's one job (checkpoints every epoch) runs on it; once the job has
-written a checkpoint its worker process (``ray::run_job``) is killed. Ray retries the task, the job
-resumes from its checkpoint, and the rows equal a serial run's. The head's process group is stopped in
-a ``finally`` (not ``ray stop``, which stops every Ray instance of the machine).
+written a checkpoint its worker process (``ray::run_one``, in the head's process tree) is killed. Ray
+retries the task, the job resumes from its checkpoint, and the rows equal a serial run's. The head's
+process group is stopped in a ``finally`` (not ``ray stop``, which stops every Ray instance of the machine).
 """
 
 from __future__ import annotations
@@ -52,15 +52,19 @@ def wait_for_port(port: int, head: subprocess.Popen, timeout: float) -> None:
     raise TimeoutError(f"the Ray head did not listen on {port} within {timeout} s")
 
 
-def kill_job_worker(folder: Path, killed: list[int], stop: threading.Event) -> None:
-    """Once the job has a checkpoint, SIGKILL the Ray worker process running it (its title: ``ray::run_job``)."""
+def kill_job_worker(head: int, folder: Path, killed: list[int], stop: threading.Event) -> None:
+    """Once the job has a checkpoint, SIGKILL the worker running it: a process of the head's tree (none of another
+    Ray instance) titled ``ray::run_one`` (:func:`twodrl_bench.backends.run_one`)."""
     checkpoint = folder / "checkpoints" / "twoda2c_seed0.pkl"
     while not stop.is_set() and not checkpoint.exists():
         time.sleep(0.05)
-    for proc in psutil.process_iter(["pid", "cmdline"]):
-        if proc.info["cmdline"] and proc.info["cmdline"][0].startswith("ray::run_job"):
-            os.kill(proc.info["pid"], signal.SIGKILL)
-            killed.append(proc.info["pid"])
+    for proc in psutil.Process(head).children(recursive=True):
+        try:
+            if proc.cmdline() and proc.cmdline()[0].startswith("ray::run_one"):
+                os.kill(proc.pid, signal.SIGKILL)
+                killed.append(proc.pid)
+        except psutil.NoSuchProcess:
+            continue
 
 
 @pytest.mark.skipif(shutil.which("ray") is None, reason="the ray command is absent")
@@ -83,7 +87,8 @@ def test_a_study_on_a_cluster_survives_a_killed_worker_with_the_serial_rows(tmp_
     stop = threading.Event()
     try:
         wait_for_port(gcs, head, 40)
-        killer = threading.Thread(target=kill_job_worker, args=(tmp_path / "cluster", killed, stop), daemon=True)
+        args = (head.pid, tmp_path / "cluster", killed, stop)
+        killer = threading.Thread(target=kill_job_worker, args=args, daemon=True)
         killer.start()
         folder = run_study(spec, tmp_path / "cluster", "ray", address=f"127.0.0.1:{gcs}", report=False)
         stop.set()
