@@ -234,8 +234,10 @@ def settings_algo(algo: str) -> str:
 
 
 def resolve(spec: Spec) -> Spec:
-    """``spec`` with each arm's ``hyperparams`` (the env's entry of its settings file, overrides applied; for the
-    epoch protocol without rl-zoo3's keys) and ``defaults`` (the constructor defaults in force, as ``repr``).
+    """``spec`` with each arm's ``hyperparams`` and ``defaults`` (the constructor defaults in force, as ``repr``).
+
+    Epochs: the env's entry of the arm's settings file, rl-zoo3's keys dropped, overrides applied. Timesteps:
+    ``twodrl_bench.timesteps.resolve_arm``'s entry (rl-zoo3's files among the settings).
 
     :raises ValueError: if a settings file or its entry for the env is missing, or (epochs) holds a schedule
     """
@@ -244,15 +246,19 @@ def resolve(spec: Spec) -> Spec:
     out = copy.deepcopy(spec)
     epochs = "epochs" in spec["protocol"]
     for name, arm in out["arms"].items():
+        if not epochs:  # the timesteps job's own entries (rl-zoo3's files among them)
+            from twodrl_bench.timesteps import resolve_arm
+
+            arm["hyperparams"] = resolve_arm(arm, spec["env"], spec["protocol"])
+            arm["defaults"] = class_defaults(arm["algo"], arm["hyperparams"])
+            continue
         folder = None if arm["settings"] == "packaged" else arm["settings"]
         entry = read_entry(hyperparams_path(settings_algo(arm["algo"]), folder), spec["env"])
-        if epochs:
-            entry = {k: v for k, v in entry.items() if k not in ZOO_ONLY}
+        entry = {k: v for k, v in entry.items() if k not in ZOO_ONLY}
         hyperparams = {**entry, **arm["override"]}
-        if epochs:
-            for key, value in hyperparams.items():
-                if isinstance(value, str) and value.startswith(("lin_", "linear_")):
-                    raise ValueError(f"arms.{name}: {key} is a schedule ({value!r}); epochs take constants")
+        for key, value in hyperparams.items():
+            if isinstance(value, str) and value.startswith(("lin_", "linear_")):
+                raise ValueError(f"arms.{name}: {key} is a schedule ({value!r}); epochs take constants")
         arm["hyperparams"] = hyperparams
         arm["defaults"] = class_defaults(arm["algo"], hyperparams)
     return out

@@ -3,13 +3,17 @@
 A study is one spec (``quick_preset``) or several parts (``paper_preset/NomadOffice-v0``, ...), each
 run into its own folder (:mod:`twodrl_bench.runner`). :func:`report_study` reads the parts' resolved
 specs and rows, copies them to the output folder (a single-part study's at its top, a part's in
-``<out>/<part>/``) and calls the report the specs name: ``twodrl_bench.reports.<report>.report(parts,
-out) -> str`` (writes ``table.md`` and figures under ``out``; returns the text to print).
+``<out>/<part>/``) and calls the report the specs name (``twodrl_bench.reports.<report>``, or a module's
+dotted path): ``report(parts, out) -> str``, or ``report(rows, specs, out) -> str`` with every part's rows
+as ``csv.DictReader`` records and their specs. A report writes ``table.md`` and figures under ``out`` and
+returns the text to print.
 """
 
 from __future__ import annotations
 
+import csv
 import importlib
+import inspect
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
@@ -83,7 +87,16 @@ def report_parts(parts: list[Part], out: Path) -> str:
             (target / "spec.yml").write_text(yaml.safe_dump(p.spec, sort_keys=False, width=120))
             if (p.folder / "rows.csv").is_file():
                 shutil.copyfile(p.folder / "rows.csv", target / "rows.csv")
-    module = importlib.import_module(f"twodrl_bench.reports.{names.pop()}")
-    text = module.report(parts, out)
+    name = names.pop()
+    module = importlib.import_module(name if "." in name else f"twodrl_bench.reports.{name}")
+    if next(iter(inspect.signature(module.report).parameters)) == "parts":
+        text = module.report(parts, out)
+    else:
+        rows = []
+        for p in parts:
+            if (p.folder / "rows.csv").is_file():
+                with (p.folder / "rows.csv").open(newline="") as f:
+                    rows += list(csv.DictReader(f))
+        text = module.report(rows, [p.spec for p in parts], out)
     print(text)
     return text
