@@ -228,9 +228,15 @@ def _expand_grid(source: str, grid: Any) -> dict[str, dict[str, Any]]:
     return arms
 
 
+SETTINGS_SUFFIXES = ("_variant", "_auto")
+"""An algorithm named ``<algo><suffix>`` (an ablation variant, a self-tuning arm) reads ``<algo>``'s settings."""
+
+
 def settings_algo(algo: str) -> str:
-    """The algorithm whose settings file ``algo`` reads: a variant (``<algo>_variant``) reads its algorithm's."""
-    return algo.removesuffix("_variant")
+    """The algorithm whose settings file ``algo`` reads (:data:`SETTINGS_SUFFIXES`)."""
+    for suffix in SETTINGS_SUFFIXES:
+        algo = algo.removesuffix(suffix)
+    return algo
 
 
 def resolve(spec: Spec) -> Spec:
