@@ -211,3 +211,10 @@ def test_the_command_runs_reports_and_shows_status(tmp_path, settings, capsys) -
     assert "toy (" in (status := capsys.readouterr().out) and "2/2 jobs done" in status
     with pytest.raises(SystemExit):
         cli.parse_args(["run", "quick_preset", "--address", "localhost:6379"])
+
+
+def test_a_report_by_module_path_taking_records_and_specs(tmp_path, settings, capsys) -> None:
+    spec = toy_spec(settings, seeds=[0], protocol={"epochs": 2, "learn_episodes": 4, "test_episodes": 2})
+    run_study({**spec, "report": "tests.toy_records_report"}, tmp_path, "serial")
+    assert "4 rows of ['toy'], arms ['a2c', 'twoda2c']" in capsys.readouterr().out
+    assert (tmp_path / "table.md").read_text() == "4 rows of ['toy'], arms ['a2c', 'twoda2c']\n"
