@@ -16,8 +16,8 @@ from gymnasium.vector import AutoresetMode, SyncVectorEnv
 import envs  # noqa: F401  (registers the IDs)
 from sb3_twodrl import TwoDimA2C
 from twodrl_bench import RunSpec, VectorEnvAdapter, algo_class, make_train_env, run_pair
-from twodrl_bench import runner as runner_module
-from twodrl_bench.runner import checkpoint_path, progress_path
+from twodrl_bench import epochs as runner_module
+from twodrl_bench.epochs import checkpoint_path, progress_path
 
 ENV = "NomadOffice-v0"
 HP = {
@@ -154,22 +154,3 @@ def test_cartpole_falls_back_to_per_env():
     """CartPole's registered vector env resets on the next step, which SB3 cannot use: auto picks DummyVecEnv."""
     assert type(make_train_env("CartPole-v1", 2, 0)).__name__ == "DummyVecEnv"
     assert type(make_train_env(ENV, 2, 0)) is VectorEnvAdapter
-
-
-def _check_config_repeatedly(out_dir: str, seed: int) -> None:
-    from twodrl_bench.grid import check_config
-
-    config = {"env_id": "E", "epochs": 1, "learn_episodes": 1, "test_episodes": 1, "vec_env": "auto"}
-    for _ in range(300):
-        check_config(out_dir, {**config, "env_kwargs": {}, "hyperparams": {f"algo{seed}": {"x": "1"}}})
-
-
-def test_invocations_on_one_folder_never_read_a_half_written_config(tmp_path) -> None:
-    """Two invocations started together (e.g. one per seed) both read and write ``config.json``."""
-    ctx = mp.get_context("fork")
-    workers = [ctx.Process(target=_check_config_repeatedly, args=(str(tmp_path), i)) for i in range(2)]
-    for w in workers:
-        w.start()
-    for w in workers:
-        w.join(60)
-    assert [w.exitcode for w in workers] == [0, 0]

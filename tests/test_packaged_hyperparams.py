@@ -10,7 +10,7 @@ import pytest
 import envs  # noqa: F401  (registers the Nomad office ids)
 import sb3_twodrl
 from sb3_twodrl.hyperparams import PACKAGED, hyperparams_path, read_entry
-from twodrl_bench import load_hyperparams, reproduce
+from twodrl_bench import load_hyperparams, load_spec, resolve
 
 
 @pytest.mark.parametrize("algo", PACKAGED)
@@ -30,7 +30,7 @@ def test_an_unknown_env_or_algo_is_an_error_naming_it() -> None:
     with pytest.raises(ValueError, match=r"a2c\.yml has no entry for 'CartPole-v0'"):
         load_hyperparams(hyperparams_path("a2c"), "CartPole-v0")
     with pytest.raises(ValueError, match=r"ToyNav-v0"):
-        reproduce.specs_from_args(reproduce.parse_args(["--env", "ToyNav-v0"]))
+        resolve({**load_spec("quick_preset"), "env": "ToyNav-v0"})
     with pytest.raises(ValueError, match=r"dqn\.yml' does not exist"):
         hyperparams_path("dqn")
 

@@ -11,20 +11,22 @@ from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
 from tests.toy_envs import LatticeCorridor
-from twodrl_bench import ablation
 from twodrl_bench.algos import algo_class
-from twodrl_bench.grid import collect_results
+from twodrl_bench.runner import run_study
+from twodrl_bench.spec import load_spec, settings_algo
 from twodrl_bench.variants import VariantTwoDimA2C, VariantTwoDimPPO
 
 FIGURES = Path(__file__).resolve().parents[1] / "results" / "ablation"
 BASE = {"a2c": {"n_envs": 2, "n_steps": 8}, "twoda2c": {"n_envs": 2, "n_steps": 8, "punishment_gamma": 0.1}}
 BASE |= {"ppo": {**BASE["a2c"], "batch_size": 16}, "twodppo": {**BASE["twoda2c"], "batch_size": 16}}
+ABLATION = load_spec("ablation")
 
 
-@pytest.mark.parametrize("arm", sorted(set(ablation.ARMS) - {"a2c", "ppo"}))
+@pytest.mark.parametrize("arm", sorted(set(ABLATION["arms"]) - {"a2c", "ppo"}))
 def test_every_arm_builds_and_runs(arm: str) -> None:
     """A few hundred steps of each arm's algorithm on a small env, its variant settings in force."""
-    algo, hp = ablation.arm_hyperparams(arm, BASE, temperature=0.7)
+    algo = ABLATION["arms"][arm]["algo"]
+    hp = {**BASE[settings_algo(algo)], **ABLATION["arms"][arm]["override"]}
     n_envs = hp.pop("n_envs")
     env = make_vec_env(lambda: TimeLimit(LatticeCorridor(5, 3), 30), n_envs=n_envs, seed=0)
     model = algo_class(algo)("MlpPolicy", env, seed=0, **hp).learn(320)
@@ -87,11 +89,11 @@ ROWS = [  # (arm, committed results file, seed): one row per kind of variant, it
 @pytest.mark.slow
 @pytest.mark.parametrize(("arm", "results", "seed"), ROWS)
 def test_a_committed_row_comes_back_from_its_command(tmp_path: Path, arm: str, results: str, seed: int) -> None:
-    """``sb3-twodrl-ablation --arms <arm> --seeds <seed> --epochs 1`` gives the committed epoch-1 row exactly."""
+    """The ablation spec's arm, at that seed for 1 epoch, gives the committed epoch-1 row exactly."""
     committed = pd.read_csv(FIGURES / results)
     row = committed[(committed["arm"] == arm) & (committed["seed"] == seed) & (committed["epoch"] == 1)].iloc[0]
-    argv = ["--out", str(tmp_path), "--seeds", str(seed), "--epochs", "1", "--backend", "serial", "--arms", arm]
-    ablation.ablation(argv)
-    ran = collect_results(tmp_path / arm).iloc[0]
+    spec = {**ABLATION, "arms": {arm: ABLATION["arms"][arm]}, "seeds": [seed]}
+    spec["protocol"] = {**spec["protocol"], "epochs": 1}
+    ran = pd.read_csv(run_study(spec, tmp_path, "serial", report=False) / "rows.csv").iloc[0]
     for key in ("env_steps", "goal_rate", "reward_per_step", "interest_share", "mean_temperature"):
         assert ran[key] == pytest.approx(row[key], rel=1e-12), key

@@ -1,20 +1,23 @@
-"""The paper's experiments as a library (rl-zoo3 keeps its ``ExperimentManager`` in the package too).
+"""The research bench: the paper's studies as data (specs), one runner, reports.
 
-- :mod:`.protocol`: presets, :class:`RunSpec`, hyperparameter files, CSV columns;
-- :mod:`.algos`: algorithm names (``ALGOS``, the package's ``name -> class`` table);
-- :mod:`.vec_env`: batched VecEnvs found through the Gymnasium registry's ``vector_entry_point``;
-- :mod:`.trials`: an epoch's test trials in one batched call per step;
-- :mod:`.runner`: one (algo, seed) run, epochs of exactly K learning trials, checkpoints, resume;
-- :mod:`.grid`: backends (serial, processes, Ray), tidy CSV;
-- :mod:`.reproduce`, :mod:`.transfer`, :mod:`.plots`: the command lines (``sb3-twodrl-*``).
+- :mod:`.spec`: load, validate, resolve and compare specs (``specs/<study>.yml``, ``specs/<study>/<part>.yml``);
+- :mod:`.runner`: every (arm, seed) job of a spec into a run folder, resumed and guarded; :mod:`.backends`:
+  local processes or Ray tasks; :mod:`.machine`: what decides the bits;
+- :mod:`.epochs`: the epoch job (epochs of exactly K learning trials and M test trials, checkpoints, resume);
+- :mod:`.reports`: what a study's rows say (tables, figures);
+- :mod:`.cli`: ``sb3-twodrl-bench run | report | status``;
+- shared machinery: :mod:`.protocol` (run specs, CSV columns), :mod:`.algos` (algorithm names),
+  :mod:`.vec_env` (batched VecEnvs), :mod:`.trials` (an epoch's test trials), :mod:`.checkpoint`,
+  :mod:`.intervals`, :mod:`.plots`.
 
 Nothing here imports an env package: envs are named by ID, their packages by ``gym_packages``.
 """
 
 from twodrl_bench.algos import ALGOS, algo_class
-from twodrl_bench.grid import collect_results, run_grid
+from twodrl_bench.epochs import run_pair
 from twodrl_bench.protocol import COLUMNS, METRICS, PRESETS, RunSpec, load_hyperparams
-from twodrl_bench.runner import run_pair
+from twodrl_bench.runner import run_study
+from twodrl_bench.spec import load_spec, resolve
 from twodrl_bench.trials import run_test_trials
 from twodrl_bench.vec_env import VectorEnvAdapter, make_test_env, make_train_env
 
@@ -26,11 +29,12 @@ __all__ = [
     "RunSpec",
     "VectorEnvAdapter",
     "algo_class",
-    "collect_results",
     "load_hyperparams",
+    "load_spec",
     "make_test_env",
     "make_train_env",
-    "run_grid",
+    "resolve",
     "run_pair",
+    "run_study",
     "run_test_trials",
 ]

@@ -1,6 +1,6 @@
-"""Figures 3-5 of the 2D-RL paper and a results table from the experiment runner's tidy CSV (extra ``plots``).
+"""Figures 3-5 of the 2D-RL paper and its results tables from an epoch study's rows (extra ``plots``).
 
-``python scripts/plots.py runs/reproduce/NomadOfficeMemorable-v0/results.csv`` redraws them.
+The reports draw them (``sb3-twodrl-bench report quick_preset`` redraws them from the run folders).
 Curves: mean over seeds per epoch, band: 95% confidence interval of that mean (Student t over
 seeds; a seed whose share is undefined at an epoch, because none of its test episodes committed
 to a route, is left out of that epoch's share).
@@ -8,7 +8,6 @@ to a route, is left out of that epoch's share).
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
 import numpy as np
@@ -133,18 +132,3 @@ def window_table(df: pd.DataFrame, windows: tuple[tuple[int, int], ...] = PAPER_
             cells = [_cell(per_seed[metric].to_numpy(), fmt) for metric, fmt in TABLE_METRICS]
             lines.append(f"| {label} | {lo}-{hi} | {len(per_seed)} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
-
-
-def main(argv: list[str] | None = None) -> None:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("csv", help="results.csv of the experiment runner")
-    p.add_argument("--out", help="folder of the figures (default: the CSV's)")
-    p.add_argument("--title", default="")
-    args = p.parse_args(argv)
-    df = pd.read_csv(args.csv)
-    out = Path(args.out or Path(args.csv).parent)
-    env_id = str(df["env"].iloc[0]) if len(df) else ""
-    for path in make_figures(df, out, title=args.title or env_id):
-        print(path)
-    print(summary_table(df, env_id=env_id))
-    print(window_table(df))

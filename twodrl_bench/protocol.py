@@ -48,7 +48,8 @@ class RunSpec:
     ``vec_env``: ``"auto"`` (the registry's batched env where there is one), ``"batched"`` or
     ``"dummy"`` (SB3's ``DummyVecEnv``); see :mod:`twodrl_bench.vec_env`.
     ``checkpoint_every``: epochs between checkpoints (0: none). ``env_kwargs``: passed to the env's
-    constructor for learning and test trials alike (e.g. ``{"observe_odometry": False}``).
+    constructor for learning and test trials alike (e.g. ``{"observe_odometry": False}``). ``label``: the
+    run's name instead of the algorithm's (a study's arm: two arms may run one algorithm).
     """
 
     env_id: str
@@ -65,6 +66,7 @@ class RunSpec:
     save_model: bool = True
     tensorboard: bool = True
     env_kwargs: dict[str, Any] = field(default_factory=dict)
+    label: str = ""
 
     def __post_init__(self) -> None:
         for name in ("epochs", "learn_episodes", "test_episodes"):
@@ -78,7 +80,7 @@ class RunSpec:
 
     @property
     def name(self) -> str:
-        return f"{self.algo}_seed{self.seed}"
+        return f"{self.label or self.algo}_seed{self.seed}"
 
     def protocol(self) -> dict[str, Any]:
         """What a checkpoint must agree on to be resumed by this spec (all but paths, length and outputs),

@@ -1,170 +1,179 @@
-"""One (algo, seed) run of the paper's protocol, resumable from its last checkpoint.
+"""The study runner: every (arm, seed) job of a spec, run on a backend, resumed, guarded.
 
-Learning goes on in one ``learn()`` call; :class:`EpochCallback` counts finished learning trials
-over all envs and, in the step in which the (e*K)-th ends, runs epoch e's M test trials (the
-policy is the same whichever of that step's trials is the (e*K)-th: parameters change only
-between rollouts). Trials of that step beyond e*K count toward epoch e + 1, so every epoch is
-exactly K trials and no collected experience is thrown away at an epoch boundary.
+A job is one (arm, seed) of a resolved spec (:mod:`twodrl_bench.spec`); its function is chosen by
+the protocol: :func:`twodrl_bench.epochs.run_job` (the paper's epochs) or
+``twodrl_bench.timesteps.run_job`` (a budget of timesteps and a final evaluation), both
+``run_job(arm, env, env_kwargs, protocol, seed, out_dir, gym_packages) -> rows``.
 
-Every ``checkpoint_every`` epochs, at the next rollout start (a clean boundary: the update of the
-last rollout done, the buffer empty), the run is checkpointed (:mod:`.checkpoint`) together with
-its rows so far; a run that finds a checkpoint of its protocol continues from it and produces the
-rows an uninterrupted run produces (``wall_s`` aside, which adds the time before the interruption).
-At the end the model is saved (``models/<algo>_seed<seed>.zip``, loadable by ``<Algo>.load``).
+The run folder (default ``runs/<spec name>``) holds ``spec.yml`` (the resolved spec), ``machine.json``
+(:func:`record_machine`: the machines its jobs ran on), ``rows/<arm>_seed<seed>.csv``
+per finished job (written atomically: a job with a file is done), ``rows.csv`` (every job's rows),
+and what the jobs keep: ``checkpoints/`` (a job without rows resumes from its checkpoint), ``progress/``,
+``models/`` and ``tb/``. Running a spec into a folder whose stored spec differs in what decides the rows
+(:func:`twodrl_bench.spec.guard_diff`) is refused; arms and seeds may be added.
 """
 
 from __future__ import annotations
 
-import copy
+import csv
 import importlib
-import math
-import shutil
-import time
+import io
+import json
+import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-import torch as th
-from stable_baselines3.common.base_class import BaseAlgorithm
-from stable_baselines3.common.callbacks import BaseCallback
-from stable_baselines3.common.utils import set_random_seed
-from stable_baselines3.common.vec_env import VecEnv
+import yaml
 
-from sb3_twodrl.callbacks import NavigationMetricsCallback
-from twodrl_bench.algos import algo_class
-from twodrl_bench.checkpoint import load_checkpoint, save_checkpoint, set_rng_state
-from twodrl_bench.protocol import LEARNING, METRICS, RunSpec, trial_seed
-from twodrl_bench.trials import run_test_trials
-from twodrl_bench.vec_env import make_test_env, make_train_env
+from twodrl_bench.backends import run_jobs
+from twodrl_bench.checkpoint import atomic_write_bytes
+from twodrl_bench.spec import Spec, dump, guard_diff, load_spec, merge, resolve, validate
 
 Row = dict[str, Any]
 
 
-def checkpoint_path(out_dir: str | Path, name: str) -> Path:
-    return Path(out_dir) / "checkpoints" / f"{name}.pkl"
+def job_function(protocol: dict[str, Any]) -> Callable[..., list[Row]]:
+    """The job function of ``protocol``: epochs or timesteps."""
+    module = "twodrl_bench.epochs" if "epochs" in protocol else "twodrl_bench.timesteps"
+    return importlib.import_module(module).run_job
 
 
-def model_path(out_dir: str | Path, name: str) -> Path:
-    return Path(out_dir) / "models" / f"{name}.zip"
+def rows_path(folder: str | Path, arm: str, seed: int) -> Path:
+    return Path(folder) / "rows" / f"{arm}_seed{seed}.csv"
 
 
-def progress_path(out_dir: str | Path, name: str) -> Path:
-    """One line per finished epoch of a running pair: what a driver's progress bar reads."""
-    return Path(out_dir) / "pairs" / f"{name}.progress"
+def write_rows(path: Path, rows: list[Row]) -> None:
+    """Write ``rows`` as CSV atomically (temporary file, then rename); the columns in first-seen order."""
+    columns = list(dict.fromkeys(key for row in rows for key in row))
+    buf = io.StringIO(newline="")
+    writer = csv.DictWriter(buf, fieldnames=columns)
+    writer.writeheader()
+    writer.writerows(rows)
+    atomic_write_bytes(path, buf.getvalue().encode())
 
 
-class EpochCallback(BaseCallback):
-    """Epochs of K learning trials, each followed by the M test trials; checkpoints; stops after the last."""
-
-    def __init__(self, spec: RunSpec, test_env: VecEnv, nav: NavigationMetricsCallback, state: dict[str, Any]):
-        super().__init__()
-        self.spec, self.test_env, self.nav, self.state = spec, test_env, nav, state
-        self._clock = time.perf_counter()
-        self._rng: dict[str, Any] | None = state.pop("rng", None)
-
-    def _on_training_start(self) -> None:
-        nav = self.state.get("nav")
-        if nav is not None:  # resumed: the rollout metrics' window as it was
-            self.nav.episodes, self.nav.total_episodes, self.nav._tracker = nav
-        if self._rng is not None:
-            set_rng_state(self._rng)
-
-    def elapsed(self) -> float:
-        return self.state["elapsed"] + time.perf_counter() - self._clock
-
-    def _on_rollout_start(self) -> None:
-        s, every = self.state, self.spec.checkpoint_every
-        if every and s["epoch"] - s["checkpoint_epoch"] >= every and s["epoch"] < self.spec.epochs:
-            s["checkpoint_epoch"] = s["epoch"]
-            nav = (self.nav.episodes, self.nav.total_episodes, self.nav._tracker)
-            extra = {**s, "elapsed": self.elapsed(), "nav": nav}
-            save_checkpoint(checkpoint_path(self.spec.out_dir, self.spec.name), self.model, extra)
-
-    def _on_rollout_end(self) -> None:
-        """Tally the rollout's temperatures (2D-RL algorithms: ``inverse_temperatures`` in the buffer)."""
-        inverse = getattr(self.model.rollout_buffer, "inverse_temperatures", None)
-        if inverse is None:
-            return
-        tally = self.state.setdefault("learning", [0, 0, 0.0, 0])  # interest-set, actions, sum of T, tempered
-        tempered = inverse[inverse > 0]
-        tally[0] += round(self.model.interest_share(inverse) * inverse.size)
-        tally[1] += inverse.size
-        tally[2] += float(np.sum(1.0 / tempered, dtype=np.float64))
-        tally[3] += tempered.size
-
-    def _learning_metrics(self) -> dict[str, float]:
-        """:data:`~.protocol.LEARNING` of the rollouts that ended since the last epoch; the tally restarts."""
-        inside, steps, temperature, tempered = self.state.pop("learning", [0, 0, 0.0, 0])
-        share = inside / steps if steps else math.nan
-        return dict(zip(LEARNING, (share, temperature / tempered if tempered else math.nan), strict=True))
-
-    def _on_step(self) -> bool:
-        s, spec = self.state, self.spec
-        s["episodes"] += int(np.sum(self.locals["dones"]))
-        while s["episodes"] >= (s["epoch"] + 1) * spec.learn_episodes and s["epoch"] < spec.epochs:
-            s["epoch"] += 1
-            metrics = run_test_trials(self.model, self.test_env, trial_seed(spec.seed, s["epoch"]))
-            row = {
-                "env": spec.env_id,
-                "algo": spec.algo,
-                "seed": spec.seed,
-                "epoch": s["epoch"],
-                "learn_episodes": s["epoch"] * spec.learn_episodes,
-                **{key: metrics.get(key, math.nan) for key in METRICS},
-                **self._learning_metrics(),
-                "env_steps": int(self.num_timesteps),
-                "wall_s": round(self.elapsed(), 3),
-            }
-            s["rows"].append(row)
-            for key in METRICS:
-                self.logger.record(f"test/{key}", row[key])
-            self.logger.record("test/epoch", s["epoch"])
-            self.logger.dump(self.num_timesteps)
-            with progress_path(spec.out_dir, spec.name).open("a") as f:
-                f.write(f"{s['epoch']}\n")
-        return s["epoch"] < spec.epochs
+def read_spec(folder: str | Path) -> Spec | None:
+    """The resolved spec stored in ``folder`` (None if there is none)."""
+    path = Path(folder) / "spec.yml"
+    return yaml.safe_load(path.read_text()) if path.is_file() else None
 
 
-def _new_model(spec: RunSpec) -> BaseAlgorithm:
-    set_random_seed(spec.seed)
-    hp = copy.deepcopy(spec.hyperparams)  # SB3 fills in policy_kwargs in place (A2C's RMSprop)
-    n_envs = int(hp.pop("n_envs", 1))
-    policy = hp.pop("policy", "MlpPolicy")
-    env = make_train_env(spec.env_id, n_envs, spec.seed, spec.vec_env, spec.env_kwargs)
-    tb = str(Path(spec.out_dir) / "tb") if spec.tensorboard else None
-    return algo_class(spec.algo)(policy, env, seed=spec.seed, device="cpu", tensorboard_log=tb, **hp)
+def guard(folder: str | Path, resolved: Spec) -> Spec:
+    """The spec ``folder`` holds after this run (its stored spec merged with ``resolved``), stored there.
+
+    :raises ValueError: naming each differing key path and both values, if the stored spec differs in
+        what decides the rows
+    """
+    stored = read_spec(folder)
+    if stored is not None:
+        differences = guard_diff(stored, resolved)
+        if differences:
+            raise ValueError(
+                f"{folder} holds runs of another spec; use another --out or the stored spec. Differences "
+                f"(stored != new): " + "; ".join(differences)
+            )
+        resolved = merge(stored, resolved)
+    atomic_write_bytes(Path(folder) / "spec.yml", dump(resolved).encode())
+    return resolved
 
 
-def run_pair(spec: RunSpec) -> list[Row]:
-    """Train ``spec.algo`` with ``spec.seed`` for ``spec.epochs`` epochs (resuming a checkpoint); the CSV rows."""
-    for package in spec.gym_packages:
+def pending_jobs(resolved: Spec, folder: str | Path, arms: list[str] | None = None) -> list[dict[str, Any]]:
+    """The job arguments of every (arm, seed) of ``resolved`` (only ``arms`` if given) without a rows file."""
+    jobs = []
+    for name in arms or resolved["arms"]:
+        arm = resolved["arms"][name]
+        for seed in resolved["seeds"]:
+            if rows_path(folder, name, seed).exists():
+                continue
+            jobs.append(
+                {
+                    "arm": {"name": name, "algo": arm["algo"], "hyperparams": arm["hyperparams"]},
+                    "env": resolved["env"],
+                    "env_kwargs": resolved["env_kwargs"],
+                    "protocol": resolved["protocol"],
+                    "seed": seed,
+                    "out_dir": str(folder),
+                    "gym_packages": resolved["gym_packages"],
+                }
+            )
+    return jobs
+
+
+def collect(folder: str | Path):
+    """Every rows file of ``folder`` as one DataFrame, sorted by arm, seed (and epoch), written to ``rows.csv``."""
+    import pandas as pd
+
+    files = sorted((Path(folder) / "rows").glob("*.csv"))
+    if not files:
+        return pd.DataFrame()
+    df = pd.concat([pd.read_csv(f) for f in files], ignore_index=True)
+    keys = [k for k in ("arm", "seed", "epoch") if k in df.columns]
+    df = df.sort_values(keys, kind="stable").reset_index(drop=True)
+    buf = io.StringIO()
+    df.to_csv(buf, index=False)
+    atomic_write_bytes(Path(folder) / "rows.csv", buf.getvalue().encode())
+    return df
+
+
+def record_machine(folder: str | Path, info: dict[str, Any]) -> list[dict[str, Any]]:
+    """Add ``info`` (:func:`~twodrl_bench.machine.machine_info` of a job's process) to ``machine.json``, the list
+    of the distinct machines whose jobs ran into ``folder``, in order of first use (their rows may differ bitwise)."""
+    path = Path(folder) / "machine.json"
+    machines = json.loads(path.read_text()) if path.is_file() else []
+    if info not in machines:
+        if machines:
+            print(f"{folder}: jobs ran on another machine than before (machine.json lists each)")
+        machines.append(info)
+        atomic_write_bytes(path, json.dumps(machines, indent=1).encode())
+    return machines
+
+
+def default_folder(name: str) -> Path:
+    return Path("runs") / name
+
+
+def run_study(
+    spec: str | Path | Spec,
+    out: str | Path | None = None,
+    backend: str = "process",
+    workers: int | None = None,
+    address: str | None = None,
+    report: bool = True,
+    arms: list[str] | None = None,
+) -> Path:
+    """Run (or resume) every job of ``spec`` (a packaged name, a path or a spec mapping) into ``out``; the folder.
+
+    ``arms``: run only these arms' jobs (the folder's spec still records every arm of ``spec``).
+
+    Each finished job's rows are written at once; at the end ``rows.csv`` collects them and, with
+    ``report``, the study's report (:func:`twodrl_bench.reports.report_study`) reads the run folders.
+    """
+    resolved = resolve(validate(spec) if isinstance(spec, dict) else load_spec(spec))
+    folder = Path(out) if out is not None else default_folder(resolved["name"])
+    folder.mkdir(parents=True, exist_ok=True)
+    guard(folder, resolved)
+    for package in resolved["gym_packages"]:
         importlib.import_module(package)
-    th.set_num_threads(1)
-    ckpt = checkpoint_path(spec.out_dir, spec.name)
-    progress = progress_path(spec.out_dir, spec.name)
-    progress.parent.mkdir(parents=True, exist_ok=True)
-    if ckpt.exists():
-        model, rng, state = load_checkpoint(ckpt)
-        if state["protocol"] != spec.protocol():
-            raise ValueError(f"{ckpt} was written by another protocol: {state['protocol']} != {spec.protocol()}")
-        state["rng"] = rng
-    else:
-        model = _new_model(spec)
-        state = {"protocol": spec.protocol(), "episodes": 0, "epoch": 0, "checkpoint_epoch": 0, "rows": []}
-        state["elapsed"] = 0.0
-        if spec.tensorboard:  # an interrupted attempt that left no checkpoint
-            for stale in (Path(spec.out_dir) / "tb").glob(f"{spec.name}_*"):
-                shutil.rmtree(stale, ignore_errors=True)
-    progress.write_text("".join(f"{row['epoch']}\n" for row in state["rows"]))
-    test_env = make_test_env(spec.env_id, spec.test_episodes, spec.vec_env, spec.env_kwargs)
-    nav = NavigationMetricsCallback()
-    epochs = EpochCallback(spec, test_env, nav, state)
-    if state["epoch"] < spec.epochs:
-        model.learn(10**15, callback=[nav, epochs], tb_log_name=spec.name, log_interval=100, reset_num_timesteps=False)
-    if spec.save_model:
-        path = model_path(spec.out_dir, spec.name)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        model.save(path)
-    model.get_env().close()
-    test_env.close()
-    return state["rows"]
+    unknown = sorted(set(arms or []) - set(resolved["arms"]))
+    if unknown:
+        raise ValueError(f"arms must be among the spec's {list(resolved['arms'])}, got {unknown}")
+    jobs = pending_jobs(resolved, folder, arms)
+    total = len(arms or resolved["arms"]) * len(resolved["seeds"])
+    if len(jobs) < total:
+        print(f"resuming {folder}: {total - len(jobs)} of {total} jobs already finished")
+    done = [total - len(jobs)]
+
+    def on_done(job: dict[str, Any], rows: list[Row], machine: dict[str, Any]) -> None:
+        write_rows(rows_path(folder, job["arm"]["name"], job["seed"]), rows)
+        record_machine(folder, machine)
+        done[0] += 1
+        print(f"[{done[0]}/{total}] {job['arm']['name']} seed {job['seed']}: {len(rows)} rows", flush=True)
+
+    run_jobs(job_function(resolved["protocol"]), jobs, on_done, backend, workers or os.cpu_count() or 1, address)
+    collect(folder)
+    if report:
+        from twodrl_bench.reports import report_run
+
+        report_run(folder)
+    return folder

@@ -1,7 +1,8 @@
-"""The factorial of ``docs/factorial.md``: which setting turns the paper's route result on: ``sb3-twodrl-factorial``.
+"""The factorial of ``docs/factorial.md``: which setting turns the paper's route result on: its report.
 
-Each cell is a folder of ``sb3-twodrl-ablation --set ...`` arms (``<runs>/<cell>/<arm>/``). This module
-reads their rows and applies the registered metrics and rules; it runs nothing. Per run
+Each cell is a part of the study (spec ``factorial/<cell>``, run folder ``runs/factorial/<cell>``). This
+report reads their rows and applies the registered metrics and rules (:data:`RULES`, which every cell's
+spec states under ``rules``: a cell stating others is refused). Per run
 (:func:`run_metrics`): learned, first epoch at a goal rate >= 0.5, the early detour share (epochs
 1-150), the final detour and shortcut shares, reward per step and collision rate (last 10% of the
 epochs), and the interest share. Per cell and arm: means with 95% intervals over seeds (Wilson for
@@ -9,12 +10,12 @@ the share that learned). Per cell: each 2D arm minus ``a2c`` with a Welch interv
 verdicts; per cell run to 1000 epochs, whether the paper's figures 3-5 reappear (:func:`paper_result`),
 read only once both arms have every seed (amendment 8). Across the exploration-bonus cells
 (``ent0``, ``ent0.01``, ``ent0.05``): the test of "the interest replaces a tuned entropy bonus"
-(:func:`bonus_claim`). With ``--figures``, the paper's figures 3-5 per cell (extra ``plots``).
+(:func:`bonus_claim`). The paper's figures 3-5 per cell; for each ``rules.read_at_epochs`` N, the
+tables of every cell read up to epoch N (amendment 12) in ``at_epoch<N>/``.
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 from pathlib import Path
@@ -22,9 +23,9 @@ from typing import Any
 
 import numpy as np
 
-from twodrl_bench.ablation import interval, summarize_run
-from twodrl_bench.grid import collect_results
 from twodrl_bench.intervals import welch_ci, wilson
+from twodrl_bench.reports import Part
+from twodrl_bench.reports.ablation import interval, summarize_run
 
 EARLY_EPOCHS = 150
 """The paper's window for its actor-critic's detour (section 3.4): epochs 1-150."""
@@ -59,6 +60,38 @@ METRICS = (
 )
 
 
+RULES: dict[str, Any] = {
+    "early_epochs": EARLY_EPOCHS,
+    "final_share": FINAL_SHARE,
+    "detour_on": DETOUR_ON,
+    "bonus_cells": BONUS_CELLS,
+    "reward_margin": REWARD_MARGIN,
+    "seeds_per_cell": SEEDS_PER_CELL,
+    "protocol_cell": PROTOCOL_CELL,
+    "long_epochs": LONG_EPOCHS,
+    "paper_window": list(PAPER_WINDOW),
+    "paper_share": PAPER_SHARE,
+}
+"""The registered rules (``docs/factorial.md``) as every cell's spec states them (plus ``read_at_epochs``)."""
+
+
+def check_rules(parts: list[Part]) -> list[int]:
+    """Refuse a cell whose spec states other rules than :data:`RULES`; the ``read_at_epochs`` of the cells.
+
+    :raises ValueError: naming the cell and the differing rule
+    """
+    from twodrl_bench.spec import diff
+
+    at: set[int] = set()
+    for part in parts:
+        rules = dict(part.spec["rules"])
+        at |= set(rules.pop("read_at_epochs", []))
+        differences = diff(RULES, rules)
+        if differences:
+            raise ValueError(f"{part.name}: rules differ from the registered ones: {'; '.join(differences)}")
+    return sorted(at)
+
+
 def run_metrics(rows: Any) -> dict[str, float]:
     """The registered metrics of one (arm, seed)'s rows, in epoch order (NaN shares are left out)."""
     summary = summarize_run(rows)
@@ -87,37 +120,33 @@ def run_metrics(rows: Any) -> dict[str, float]:
     }
 
 
-def cell_rows(runs: Path, epochs: int | None = None) -> dict[str, dict[str, Any]]:
-    """Per cell folder of ``runs``, per arm folder with rows, its rows (:func:`collect_results`), with
-    ``epochs`` only those up to that epoch (longer cells read at a shorter cell's length, amendment 12);
-    an arm whose first seed is still running is left out."""
+def cell_rows(parts: list[Part], epochs: int | None = None) -> dict[str, dict[str, Any]]:
+    """Per cell (part), per arm with rows, its rows in epoch order, with ``epochs`` only those up to that
+    epoch (longer cells read at a shorter cell's length, amendment 12)."""
     if epochs is not None and epochs < 1:
         raise ValueError(f"epochs must be >= 1, got {epochs}")
-
-    def read(arm: Path) -> Any:
-        rows = collect_results(arm)
-        return rows if epochs is None else rows[rows["epoch"] <= epochs]
-
     cells = {}
-    for cell in sorted(p for p in runs.iterdir() if p.is_dir()):
-        folders = sorted(arm for arm in cell.iterdir() if (arm / "pairs").is_dir())
-        arms = {arm.name: rows for arm in folders if len(rows := read(arm))}
+    for part in sorted(parts, key=lambda p: p.part):
+        if part.rows.empty:
+            continue
+        rows = part.rows if epochs is None else part.rows[part.rows["epoch"] <= epochs]
+        arms = {arm: g.reset_index(drop=True) for arm, g in rows.groupby("arm", sort=True)}
         if arms:
-            cells[cell.name] = arms
+            cells[part.part] = arms
     return cells
 
 
-def read_cells(runs: Path, epochs: int | None = None) -> dict[str, dict[str, list[dict[str, float]]]]:
+def read_cells(parts: list[Part], epochs: int | None = None) -> dict[str, dict[str, list[dict[str, float]]]]:
     """Per cell, per arm (:func:`cell_rows`, up to ``epochs``), the :func:`run_metrics` of each seed."""
     cells = {
         cell: {
             arm: [{"seed": int(seed), **run_metrics(rows)} for seed, rows in df.groupby("seed")]
             for arm, df in arms.items()
         }
-        for cell, arms in cell_rows(runs, epochs).items()
+        for cell, arms in cell_rows(parts, epochs).items()
     }
     if not cells:
-        raise ValueError(f"runs: no cell with rows under {runs}")
+        raise ValueError(f"factorial: no cell with rows among {[p.name for p in parts]}")
     return cells
 
 
@@ -259,13 +288,16 @@ def _learned(runs: list[dict[str, float]]) -> tuple[int, int, tuple[float, float
     return k, n, wilson(k, n)
 
 
-def check_bonus_cells(runs: Path) -> None:
-    """Refuse a :data:`BONUS_CELLS` folder whose arms ran at another ``ent_coef`` than its name says."""
-    for cell, coef in BONUS_CELLS.items():
-        for config in sorted((runs / cell).glob("*/config.json")):
-            for arm, params in json.loads(config.read_text())["hyperparams"].items():
-                if float(params.get("ent_coef", math.nan)) != coef:
-                    raise ValueError(f"runs: cell {cell!r} arm {arm!r} has ent_coef {params.get('ent_coef')!r}")
+def check_bonus_cells(parts: list[Part]) -> None:
+    """Refuse a :data:`BONUS_CELLS` cell whose arms run at another ``ent_coef`` than its name says."""
+    for part in parts:
+        coef = BONUS_CELLS.get(part.part)
+        if coef is None:
+            continue
+        for arm, settings in part.spec["arms"].items():
+            value = settings["hyperparams"].get("ent_coef", math.nan)
+            if float(value) != coef:
+                raise ValueError(f"cell {part.part!r} arm {arm!r} has ent_coef {value!r}")
 
 
 def bonus_claim(cells: dict[str, dict[str, list[dict[str, float]]]], arm: str = "twoda2c") -> str:
@@ -307,7 +339,7 @@ def bonus_claim(cells: dict[str, dict[str, list[dict[str, float]]]], arm: str = 
     )
 
 
-def figures(runs: Path, out: Path, epochs: int | None = None) -> list[Path]:
+def figures(parts: list[Part], out: Path, epochs: int | None = None) -> list[Path]:
     """The paper's figures 3-5 of each cell, every arm's seeds up to ``epochs``
     (:func:`~twodrl_bench.plots.make_figures`): ``<out>/<cell>/fig*.png``."""
     import pandas as pd
@@ -315,26 +347,15 @@ def figures(runs: Path, out: Path, epochs: int | None = None) -> list[Path]:
     from twodrl_bench.plots import make_figures
 
     paths = []
-    for cell, arms in cell_rows(runs, epochs).items():
-        df = pd.concat(arms.values(), ignore_index=True)
-        seeds = ", ".join(f"{algo} {g['seed'].nunique()}" for algo, g in df.groupby("algo"))
+    for cell, arms in cell_rows(parts, epochs).items():
+        df = pd.concat(arms.values(), ignore_index=True).assign(algo=lambda d: d["arm"])
+        seeds = ", ".join(f"{arm} {g['seed'].nunique()}" for arm, g in df.groupby("algo"))
         paths += make_figures(df, out / cell, title=f"factorial cell {cell} (seeds: {seeds})")
     return paths
 
 
-def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--runs", type=Path, default=Path("runs") / "factorial", help="folder of the cell folders")
-    p.add_argument("--out", type=Path, help="also write table.md and runs.json here")
-    p.add_argument("--figures", action="store_true", help="with --out: also the figures 3-5 of each cell")
-    p.add_argument("--epochs", type=int, help="read each run's rows up to this epoch (default: all)")
-    return p.parse_args(argv)
-
-
-def main(argv: list[str] | None = None) -> None:
-    args = parse_args(argv)
-    check_bonus_cells(args.runs)
-    cells = read_cells(args.runs, args.epochs)
+def tables(cells: dict[str, dict[str, list[dict[str, float]]]]) -> str:
+    """The registered tables and verdicts of ``cells``."""
     parts = [
         table(cells),
         verdicts(cells),
@@ -346,11 +367,19 @@ def main(argv: list[str] | None = None) -> None:
         "Per seed:",
         seeds_table(cells),
     ]
-    text = "\n\n".join(parts) + "\n"
-    if args.out:
-        args.out.mkdir(parents=True, exist_ok=True)
-        (args.out / "table.md").write_text(text)
-        (args.out / "runs.json").write_text(json.dumps(cells, indent=1))
-        if args.figures:
-            figures(args.runs, args.out, args.epochs)
-    print(text)
+    return "\n\n".join(parts) + "\n"
+
+
+def report(parts: list[Part], out: Path) -> str:
+    """Write ``table.md``, ``runs.json`` and each cell's figures under ``out`` (and ``at_epoch<N>/`` for each
+    ``rules.read_at_epochs``); the tables."""
+    at = check_rules(parts)
+    check_bonus_cells(parts)
+    for epochs, folder in [(None, out), *((n, out / f"at_epoch{n}") for n in at)]:
+        cells = read_cells(parts, epochs)
+        text = tables(cells)
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "table.md").write_text(text)
+        (folder / "runs.json").write_text(json.dumps(cells, indent=1))
+    figures(parts, out)
+    return (out / "table.md").read_text()
