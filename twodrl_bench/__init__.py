@@ -13,13 +13,17 @@
 Nothing here imports an env package: envs are named by ID, their packages by ``gym_packages``.
 """
 
-from twodrl_bench.algos import ALGOS, algo_class
-from twodrl_bench.epochs import run_pair
-from twodrl_bench.protocol import COLUMNS, METRICS, PRESETS, RunSpec, load_hyperparams
-from twodrl_bench.runner import run_study
-from twodrl_bench.spec import load_spec, resolve
-from twodrl_bench.trials import run_test_trials
-from twodrl_bench.vec_env import VectorEnvAdapter, make_test_env, make_train_env
+from twodrl_bench.machine import use_reproducible_kernels
+
+use_reproducible_kernels()  # before any module below runs a torch kernel
+
+from twodrl_bench.algos import ALGOS, algo_class  # noqa: E402
+from twodrl_bench.epochs import run_pair  # noqa: E402
+from twodrl_bench.protocol import COLUMNS, METRICS, PRESETS, RunSpec, load_hyperparams  # noqa: E402
+from twodrl_bench.runner import run_study  # noqa: E402
+from twodrl_bench.spec import load_spec, resolve  # noqa: E402
+from twodrl_bench.trials import run_test_trials  # noqa: E402
+from twodrl_bench.vec_env import VectorEnvAdapter, make_test_env, make_train_env  # noqa: E402
 
 __all__ = [
     "ALGOS",

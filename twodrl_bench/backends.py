@@ -21,7 +21,7 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
-from twodrl_bench.machine import machine_info
+from twodrl_bench.machine import REPRODUCIBLE_KERNELS, machine_info
 
 BACKENDS = ("process", "ray", "serial")
 RAY_RETRIES = 3
@@ -78,12 +78,14 @@ def _run_ray(fn: Callable[..., Rows], jobs: list[Job], on_done: OnDone, workers:
         import ray
     except ImportError:
         raise ValueError("backend 'ray' needs Ray: pip install 'sb3-twodrl[cluster]'") from None
+    kernels = {name: os.environ[name] for name in REPRODUCIBLE_KERNELS if name in os.environ}
     init: dict[str, Any] = {"ignore_reinit_error": True, "include_dashboard": False, "log_to_driver": False}
     if address:
         init["address"] = address
+        init["runtime_env"] = {"env_vars": kernels}
     else:  # a local instance: its workers import this checkout the way the driver does
         init["num_cpus"] = workers
-        init["runtime_env"] = {"env_vars": {"PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}}
+        init["runtime_env"] = {"env_vars": {"PYTHONPATH": os.pathsep.join(p for p in sys.path if p), **kernels}}
     started_here = not ray.is_initialized()
     ray.init(**init)
     try:

@@ -1,8 +1,13 @@
 """What decides the bits of a run on a CPU: package versions, torch's threads and kernels, the CPU.
 
 A study's run folder keeps it as ``machine.json`` (:func:`machine_info`): rows made on two machines that
-differ here may differ bitwise (another MKL or oneDNN kernel, another instruction set, another summation
-order), so that two folders' rows are compared knowing where they were made.
+differ here may differ bitwise, so that two folders' rows are compared knowing where they were made.
+
+Measured (docs/studies.md, "Bits across machines"): on one x86-64 CPU, torch's MKL matrix products take a
+code path per instruction set (AVX-512, AVX2, AVX/SSE4.2), each giving other rows from the first epoch on;
+torch's own kernels (AVX-512 or AVX2) and 1 or 2 threads did not change a bit. MKL's conditional numerical
+reproducibility (``MKL_CBWR=COMPATIBLE``) takes one path whatever the instruction set: the bench sets it
+(:func:`use_reproducible_kernels`) at a cost of about 9% CPU time, unless the environment sets ``MKL_CBWR``.
 """
 
 from __future__ import annotations
@@ -13,8 +18,17 @@ import re
 from importlib import metadata
 from typing import Any
 
+REPRODUCIBLE_KERNELS = {"MKL_CBWR": "COMPATIBLE"}
+"""Environment that makes MKL's results the same on every x86-64 CPU (read by MKL at its first call)."""
 ENV_VARS = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "MKL_CBWR", "ATEN_CPU_CAPABILITY")
 PACKAGES = ("torch", "stable-baselines3", "gymnasium", "numpy")
+
+
+def use_reproducible_kernels() -> None:
+    """Set :data:`REPRODUCIBLE_KERNELS` where the environment does not set them, before torch's first kernel
+    (worker processes inherit it; Ray tasks get it through their runtime environment)."""
+    for name, value in REPRODUCIBLE_KERNELS.items():
+        os.environ.setdefault(name, value)
 
 
 def _version(package: str) -> str | None:

@@ -40,8 +40,15 @@ from typing import Any
 import numpy as np
 
 Row = dict[str, Any]
-STOCK = {"twoda2c": "a2c", "twodppo": "ppo"}
-"""The stock algorithm of each 2D-RL algorithm: whose rl-zoo3 entry it reads."""
+STOCK = {
+    "twoda2c": "a2c",
+    "twodppo": "ppo",
+    "a2c_auto": "a2c",
+    "ppo_auto": "ppo",
+    "twoda2c_auto": "a2c",
+    "twodppo_auto": "ppo",
+}
+"""The stock algorithm of each 2D-RL or self-tuning-entropy algorithm: whose rl-zoo3 entry it reads."""
 EVAL_SEED = 10**6
 """Seed of the evaluation env, plus the training seed: apart from the training seeds."""
 CURVE_BINS = 20
@@ -196,12 +203,14 @@ def run_job(
     from stable_baselines3.common.vec_env import VecNormalize
 
     from sb3_twodrl.zoo import prepare_zoo_argv, register_zoo, run_zoo_entry
+    from twodrl_bench.auto_entropy import AUTO_ENTROPY_ALGOS
 
     clock = time.perf_counter()
     check_protocol(protocol)
     if not isinstance(arm.get("name"), str) or not arm["name"] or not isinstance(arm.get("hyperparams"), dict):
         raise ValueError(f"arm must be {{name, algo, hyperparams}} (resolve_arm's entry), got {arm!r}")
     register_zoo()
+    zoo_utils.ALGOS.update(AUTO_ENTROPY_ALGOS)  # the bench's own baselines, beside the library's algorithms
     if arm.get("algo") not in zoo_utils.ALGOS:
         raise ValueError(f"arm algo must be one of rl-zoo3's {sorted(zoo_utils.ALGOS)}, got {arm.get('algo')!r}")
     if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
