@@ -1,0 +1,70 @@
+"""The self-tuning entropy study's verdict (results/auto_entropy/preregistration.md) on made-up rows."""
+
+from __future__ import annotations
+
+import pytest
+
+from twodrl_bench.reports.auto_entropy import report, verdict
+
+RULES = {
+    "claim": "twod0",
+    "against": ["auto98", "auto50"],
+    "zero": "zero",
+    "fixed": "zero",
+    "pairs": {"twod0": "zero"},
+    "return": "final_return",
+    "return_margin": 2.0,
+    "events": "train_events_per_episode",
+    "events_margin": 0.02,
+    "min_seeds": 10,
+}
+
+
+def values(**means: tuple[float, float]) -> dict[str, dict[str, list[float]]]:
+    """Ten seeds per arm around the given (return, events) means, a small spread so intervals are finite."""
+    spread = [(-1) ** i * 0.1 * (i % 3) for i in range(10)]
+    return {
+        arm: {"return": [r + s for s in spread], "events": [e + s / 100 for s in spread]}
+        for arm, (r, e) in means.items()
+    }
+
+
+def test_claim_holds_and_beats_where_the_bonus_matters() -> None:
+    text = verdict(values(twod0=(-20, 0.05), auto98=(-30, 0.05), auto50=(-40, 0.05), zero=(-100, 0.2)), RULES)
+    assert text == "reference auto98; the claim holds; the interest beats the automatic coefficient"
+
+
+def test_claim_fails_below_the_margin() -> None:
+    text = verdict(values(twod0=(-35, 0.05), auto98=(-30, 0.05), auto50=(-40, 0.05), zero=(-100, 0.2)), RULES)
+    assert text == "reference auto98; the claim fails"
+
+
+def test_claim_fails_on_events_and_reference_is_the_better_target() -> None:
+    text = verdict(values(twod0=(-20, 0.2), auto98=(-40, 0.05), auto50=(-20, 0.05), zero=(-100, 0.2)), RULES)
+    assert text == "reference auto50; the claim fails"
+
+
+def test_untested_where_zero_does_as_well() -> None:
+    text = verdict(values(twod0=(-20, 0.05), auto98=(-20, 0.05), auto50=(-40, 0.05), zero=(-20, 0.05)), RULES)
+    assert text.endswith("(untested: the stock algorithm does as well without a bonus as with the automatic one)")
+
+
+def test_no_verdict_with_fewer_seeds() -> None:
+    few = values(twod0=(-20, 0.05), auto98=(-30, 0.05), auto50=(-40, 0.05), zero=(-100, 0.2))
+    few["auto50"] = {k: v[:3] for k, v in few["auto50"].items()}
+    assert verdict(few, RULES) == "no verdict: fewer than 10 seeds for auto50"
+
+
+def test_report_writes_the_table_and_refuses_missing_rules(tmp_path) -> None:
+    spec = {"name": "auto_entropy/T", "env": "T-v0", "protocol": {"task": "T"}, "rules": RULES}
+    spec["arms"] = {arm: {} for arm in ("zero", "auto98", "auto50", "twod0")}
+    rows = [
+        {"task": "T", "arm": arm, "seed": seed, "final_return": -10.0 - seed, "train_events_per_episode": 0.1}
+        for arm in spec["arms"]
+        for seed in range(10)
+    ]
+    text = report(rows, spec, tmp_path)
+    assert (tmp_path / "table.md").read_text() == text + "\n"
+    assert "| twod0 - auto98 | +0.00 [-2.84, +2.84] | +0.000 [+0.000, +0.000] |" in text
+    with pytest.raises(ValueError, match="lack"):
+        report(rows, {**spec, "rules": {"claim": "twod0"}}, tmp_path)
