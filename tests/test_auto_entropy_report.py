@@ -46,7 +46,10 @@ def test_claim_fails_on_events_and_reference_is_the_better_target() -> None:
 
 def test_untested_where_zero_does_as_well() -> None:
     text = verdict(values(twod0=(-20, 0.05), auto98=(-20, 0.05), auto50=(-40, 0.05), zero=(-20, 0.05)), RULES)
-    assert text.endswith("(untested: the stock algorithm does as well without a bonus as with the automatic one)")
+    assert text == (
+        "reference auto98; untested: the stock algorithm does as well without a bonus as with the automatic one "
+        "(the claim's conditions: it holds)"
+    )
 
 
 def test_no_verdict_with_fewer_seeds() -> None:

@@ -2,7 +2,7 @@
 
 A study is one spec (``quick_preset``) or several parts (``paper_preset/NomadOffice-v0``, ...), each
 run into its own folder (:mod:`twodrl_bench.runner`). :func:`report_study` reads the parts' resolved
-specs and rows, copies them to the output folder (a single-part study's at its top, a part's in
+specs and rows, copies them (with ``machine.json``) to the output folder (a single-part study's at its top, a part's in
 ``<out>/<part>/``) and calls the report the specs name (``twodrl_bench.reports.<report>``, or a module's
 dotted path): ``report(parts, out) -> str``, or ``report(rows, specs, out) -> str`` with every part's rows
 as ``csv.DictReader`` records and their specs. A report writes ``table.md`` and figures under ``out`` and
@@ -76,7 +76,7 @@ def report_run(folder: str | Path) -> str:
 
 
 def report_parts(parts: list[Part], out: Path) -> str:
-    """Copy each part's ``spec.yml`` and ``rows.csv`` under ``out``, run the parts' report, print its text."""
+    """Copy each part's ``spec.yml``, ``rows.csv`` and ``machine.json`` under ``out``, run the parts' report, print its text."""
     names = {p.spec["report"] for p in parts}
     if len(names) != 1:
         raise ValueError(f"the parts name different reports: {sorted(names)}")
@@ -85,8 +85,9 @@ def report_parts(parts: list[Part], out: Path) -> str:
         target.mkdir(parents=True, exist_ok=True)
         if target.resolve() != p.folder.resolve():
             (target / "spec.yml").write_text(yaml.safe_dump(p.spec, sort_keys=False, width=120))
-            if (p.folder / "rows.csv").is_file():
-                shutil.copyfile(p.folder / "rows.csv", target / "rows.csv")
+            for name in ("rows.csv", "machine.json"):
+                if (p.folder / name).is_file():
+                    shutil.copyfile(p.folder / name, target / name)
     name = names.pop()
     module = importlib.import_module(name if "." in name else f"twodrl_bench.reports.{name}")
     if next(iter(inspect.signature(module.report).parameters)) == "parts":

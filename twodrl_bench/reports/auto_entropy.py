@@ -45,12 +45,15 @@ def verdict(values: dict[str, dict[str, list[float]]], rules: dict[str, Any]) ->
     zero_ret_hi = _interval(zero["return"], ref["return"])[1]
     zero_ev_lo = _interval(zero["events"], ref["events"])[0]
     holds = ret_lo > -rules["return_margin"] and ev_hi < rules["events_margin"]
-    text = f"reference {reference}; the claim {'holds' if holds else 'fails'}"
+    outcome = "holds" if holds else "fails"
     if holds and ret_lo > 0:
-        text += "; the interest beats the automatic coefficient"
-    if not (zero_ret_hi < 0 or zero_ev_lo > 0):
-        text += " (untested: the stock algorithm does as well without a bonus as with the automatic one)"
-    return text
+        outcome += "; the interest beats the automatic coefficient"
+    if not (zero_ret_hi < 0 or zero_ev_lo > 0):  # the bonus does not matter to the stock algorithm here
+        return (
+            f"reference {reference}; untested: the stock algorithm does as well without a bonus as with the "
+            f"automatic one (the claim's conditions: it {outcome})"
+        )
+    return f"reference {reference}; the claim {outcome}"
 
 
 def task_report(spec: Spec, rows: Sequence[Row]) -> str:
