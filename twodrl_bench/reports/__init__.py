@@ -76,7 +76,8 @@ def report_run(folder: str | Path) -> str:
 
 
 def report_parts(parts: list[Part], out: Path) -> str:
-    """Copy each part's ``spec.yml``, ``rows.csv`` and ``machine.json`` under ``out``, run the parts' report, print its text."""
+    """Copy each part's ``spec.yml``, ``rows.csv`` and ``machine.json`` under ``out``, run the parts' report,
+    print its text."""
     names = {p.spec["report"] for p in parts}
     if len(names) != 1:
         raise ValueError(f"the parts name different reports: {sorted(names)}")
