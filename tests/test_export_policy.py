@@ -12,7 +12,7 @@ from stable_baselines3 import A2C
 
 import envs  # noqa: F401
 from sb3_twodrl import TwoDimA2C
-from scripts.export_policy import export_onnx, export_policy, main
+from sb3_twodrl.export import export_onnx, export_policy, main
 
 
 @pytest.mark.parametrize("algo", [TwoDimA2C, A2C])
