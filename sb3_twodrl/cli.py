@@ -1,7 +1,8 @@
 """The installed zoo commands: ``sb3-twodrl-train`` and ``sb3-twodrl-enjoy`` (rl-zoo3's ``train`` and ``enjoy``).
 
 Both register ``twoda2c`` and ``twodppo`` (:func:`sb3_twodrl.zoo.register_zoo`) and import ``envs`` when it is
-installed, so ``--algo twoda2c --env NomadOffice-v0`` works from any folder; every rl-zoo3 option is kept.
+installed, so ``--algo twoda2c --env NomadOffice-v0`` works from any folder; every rl-zoo3 option is kept, and
+``--num-threads`` defaults to 1 (rl-zoo3's default, all cores, is several times slower for these small networks).
 ``sb3-twodrl-train`` reads the packaged ``<algo>.yml`` (:mod:`sb3_twodrl.hyperparams`) for a2c, ppo, twoda2c and
 twodppo unless ``-conf/--conf-file`` names another file. A command whose extra is missing exits, before any work,
 with the ``pip install`` line that adds it (:func:`require_extra`).
@@ -36,9 +37,11 @@ def train(argv: list[str] | None = None) -> None:
     require_extra("zoo", "rl_zoo3", "optuna", "pandas")
     from rl_zoo3.train import train as zoo_train
 
-    from sb3_twodrl.zoo import prepare_zoo_argv, run_zoo_entry
+    from sb3_twodrl.zoo import _has_option, prepare_zoo_argv, run_zoo_entry
 
     argv = prepare_zoo_argv(sys.argv[1:] if argv is None else argv, packaged_conf=True)
+    if not _has_option(argv, "--num-threads"):
+        argv += ["--num-threads", "1"]
     run_zoo_entry("sb3-twodrl-train", argv, zoo_train)
 
 
@@ -65,6 +68,8 @@ def enjoy(argv: list[str] | None = None) -> None:
         return
     from rl_zoo3.enjoy import enjoy as zoo_enjoy
 
+    if not _has_option(argv, "--num-threads"):
+        argv += ["--num-threads", "1"]
     run_zoo_entry("sb3-twodrl-enjoy", argv, zoo_enjoy)
 
 

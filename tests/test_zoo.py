@@ -199,3 +199,27 @@ def test_installed_commands_point_at_the_cli() -> None:
         'sb3-twodrl-export = "sb3_twodrl.export:main"',
     ):
         assert line in pyproject.splitlines()
+
+
+@pytest.mark.parametrize(
+    ("argv", "added"),
+    [
+        (
+            ["--algo", "twoda2c", "--env", "NomadOffice-v0"],
+            ["--conf-file", str(hyperparams_path("twoda2c")), "--num-threads", "1"],
+        ),
+        (
+            ["--algo", "twoda2c", "--env", "NomadOffice-v0", "--num-threads", "2"],
+            ["--conf-file", str(hyperparams_path("twoda2c"))],
+        ),
+        (["--algo", "a2c", "--env", "CartPole-v1", "-conf", "mine.yml"], ["--num-threads", "1"]),
+        (["--algo", "dqn", "--env", "CartPole-v1"], ["--num-threads", "1"]),  # not packaged: rl-zoo3's own file
+    ],
+)
+def test_train_defaults_to_the_packaged_file_and_one_thread(argv, added, monkeypatch):
+    import sb3_twodrl.zoo
+
+    seen: list[list[str]] = []
+    monkeypatch.setattr(sb3_twodrl.zoo, "run_zoo_entry", lambda prog, argv, entry: seen.append(argv))
+    cli.train(argv)
+    assert seen == [[*argv, *added]]
