@@ -18,7 +18,7 @@ __all__ = ["enjoy", "require_extra", "train"]
 
 
 def require_extra(extra: str, *modules: str) -> None:
-    """Exit (status 2) naming ``pip install "sb3-twodrl[<extra>]"`` if one of ``modules`` cannot be imported."""
+    """Exit (status 1) naming ``pip install "sb3-twodrl[<extra>]"`` if one of ``modules`` cannot be imported."""
     missing = []
     for module in modules:
         try:
