@@ -14,7 +14,10 @@ import importlib
 import runpy
 import sys
 
-__all__ = ["enjoy", "require_extra", "train"]
+__all__ = ["ZOO_MODULES", "enjoy", "require_extra", "train"]
+
+ZOO_MODULES = ("rl_zoo3", "optuna", "pandas", "requests")
+"""What the ``zoo`` extra installs and the commands import (rl-zoo3's enjoy imports ``requests`` undeclared)."""
 
 
 def require_extra(extra: str, *modules: str) -> None:
@@ -34,7 +37,7 @@ def require_extra(extra: str, *modules: str) -> None:
 
 def train(argv: list[str] | None = None) -> None:
     """``sb3-twodrl-train``: rl-zoo3's ``train`` with the 2D-RL algorithms and the packaged hyperparameters."""
-    require_extra("zoo", "rl_zoo3", "optuna", "pandas")
+    require_extra("zoo", *ZOO_MODULES)
     from rl_zoo3.train import train as zoo_train
 
     from sb3_twodrl.zoo import _has_option, prepare_zoo_argv, run_zoo_entry
@@ -51,7 +54,7 @@ def enjoy(argv: list[str] | None = None) -> None:
     ``--record -o videos`` records a video instead (rl-zoo3's ``record_video``, needs ``moviepy``; the env must
     support ``render_mode="rgb_array"``).
     """
-    require_extra("zoo", "rl_zoo3", "optuna", "pandas")
+    require_extra("zoo", *ZOO_MODULES)
     from sb3_twodrl.zoo import _has_option, prepare_zoo_argv, run_zoo_entry
 
     argv = prepare_zoo_argv(sys.argv[1:] if argv is None else argv)

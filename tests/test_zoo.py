@@ -169,6 +169,7 @@ def test_register_zoo_tables():
         (cli.train, ["--algo", "twoda2c", "--env", "NomadOffice-v0"], "rl_zoo3", "zoo"),
         (cli.train, ["--algo", "twoda2c", "--env", "NomadOffice-v0"], "pandas", "zoo"),
         (cli.enjoy, ["--algo", "twoda2c", "--env", "NomadOffice-v0"], "rl_zoo3", "zoo"),
+        (cli.enjoy, ["--algo", "twoda2c", "--env", "NomadOffice-v0"], "requests", "zoo"),
         (export.main, ["m.zip", "p.onnx", "--format", "onnx"], "onnx", "onnx"),
     ],
 )
