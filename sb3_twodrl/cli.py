@@ -2,7 +2,8 @@
 
 Both register ``twoda2c`` and ``twodppo`` (:func:`sb3_twodrl.zoo.register_zoo`) and import ``envs`` when it is
 installed, so ``--algo twoda2c --env NomadOffice-v0`` works from any folder; every rl-zoo3 option is kept, and
-``--num-threads`` defaults to 1 (rl-zoo3's default, all cores, is several times slower for these small networks).
+``--num-threads`` defaults to 1 (rl-zoo3's default keeps torch's thread count: several times slower for these small
+networks on a shared machine, docs/zoo.md).
 ``sb3-twodrl-train`` reads the packaged ``<algo>.yml`` (:mod:`sb3_twodrl.hyperparams`) for a2c, ppo, twoda2c and
 twodppo unless ``-conf/--conf-file`` names another file. A command whose extra is missing exits, before any work,
 with the ``pip install`` line that adds it (:func:`require_extra`).
