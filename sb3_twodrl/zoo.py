@@ -9,7 +9,8 @@ stored Optuna trial back into constructor arguments, for ``--trial-id``). Those 
 dicts that the training and enjoy scripts import by reference, so registering means adding keys to
 them, before rl-zoo3 parses its command line (its ``--algo`` choices are taken from ``ALGOS``).
 
-Requires the ``zoo`` extra (rl-zoo3, optuna, pandas).
+Requires the ``zoo`` extra; the installed commands ``sb3-twodrl-train`` and ``sb3-twodrl-enjoy`` (:mod:`sb3_twodrl.cli`)
+call :func:`register_zoo`.
 """
 
 from __future__ import annotations
@@ -139,7 +140,7 @@ def _option_value(argv: list[str], *names: str) -> str | None:
 def prepare_zoo_argv(
     argv: list[str], packaged_conf: bool = False, gym_packages: tuple[str, ...] = ("envs",)
 ) -> list[str]:
-    """Make rl-zoo3's command line ready for this project (used by ``scripts/train.py`` and ``enjoy.py``).
+    """Make rl-zoo3's command line ready for this project (used by :mod:`sb3_twodrl.cli`).
 
     Registers ``twoda2c`` and ``twodppo`` (:func:`register_zoo`), imports ``gym_packages`` that are installed (so
     ``--gym-packages envs`` is optional), and, when ``packaged_conf`` and no ``-conf/--conf-file`` is given, adds

@@ -12,7 +12,7 @@ from stable_baselines3 import A2C
 
 import envs  # noqa: F401
 from sb3_twodrl import TwoDimA2C
-from scripts.export_policy import export_onnx, export_policy, main
+from sb3_twodrl.export import export_onnx, export_policy, main
 
 
 @pytest.mark.parametrize("algo", [TwoDimA2C, A2C])
@@ -44,6 +44,18 @@ def test_cli(tmp_path):
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() in {"0", "1", "2", "3"}
+
+
+def test_cli_loads_the_named_algorithm(tmp_path, capsys):
+    model = A2C("MlpPolicy", gym.make("envs:NomadOfficeMemorable-v0"), seed=0, device="cpu")
+    model.save(tmp_path / "m.zip")
+    with pytest.raises(ValueError, match="saved by another algorithm"):  # the default --algo is twoda2c
+        main([str(tmp_path / "m.zip"), str(tmp_path / "p.pt")])
+    main([str(tmp_path / "m.zip"), str(tmp_path / "p.pt"), "--algo", "a2c"])
+    assert capsys.readouterr().out.strip() == f"wrote {tmp_path / 'p.pt'}"
+    extra = {"meta.json": ""}
+    th.jit.load(str(tmp_path / "p.pt"), _extra_files=extra)
+    assert json.loads(extra["meta.json"])["algorithm"] == "A2C"
 
 
 def _observations(n_random: int, seed: int = 2) -> np.ndarray:

@@ -13,6 +13,7 @@ import yaml
 
 import envs  # noqa: F401  (registers the Nomad office ids)
 import tests.toy_nav  # noqa: F401  (registers ToyNav-v0)
+from sb3_twodrl import cli, export
 from sb3_twodrl.hyperparams import hyperparams_path
 from sb3_twodrl.zoo import (
     ZOO_ALGOS,
@@ -29,6 +30,7 @@ ALGOS = ["a2c", "twoda2c", "ppo", "twodppo"]
 
 
 def run_script(name: str, argv: list[str], monkeypatch) -> None:
+    """``scripts/<name>`` as run from a checkout (it calls :mod:`sb3_twodrl.cli`, the installed commands)."""
     monkeypatch.setattr(sys, "argv", [name, *argv])
     runpy.run_path(str(ROOT / "scripts" / name), run_name="__main__")
 
@@ -159,3 +161,66 @@ def test_register_zoo_tables():
         assert RL_ZOO_ALGOS[key] is algo
         assert HYPERPARAMS_SAMPLER[key] is ZOO_SAMPLERS[key]
         assert HYPERPARAMS_CONVERTER[key] is convert_two_dim_params
+
+
+@pytest.mark.parametrize(
+    ("command", "argv", "blocked", "extra"),
+    [
+        (cli.train, ["--algo", "twoda2c", "--env", "NomadOffice-v0"], "rl_zoo3", "zoo"),
+        (cli.train, ["--algo", "twoda2c", "--env", "NomadOffice-v0"], "pandas", "zoo"),
+        (cli.enjoy, ["--algo", "twoda2c", "--env", "NomadOffice-v0"], "rl_zoo3", "zoo"),
+        (cli.enjoy, ["--algo", "twoda2c", "--env", "NomadOffice-v0"], "requests", "zoo"),
+        (export.main, ["m.zip", "p.onnx", "--format", "onnx"], "onnx", "onnx"),
+    ],
+)
+def test_a_command_without_its_extra_exits_first_naming_it(command, argv, blocked, extra, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setitem(sys.modules, blocked, None)  # import of it raises ImportError, as when not installed
+    if blocked == "rl_zoo3":
+        for name in [m for m in sys.modules if m.startswith("rl_zoo3.")]:
+            monkeypatch.delitem(sys.modules, name)
+    with pytest.raises(SystemExit) as exit_info:
+        command(argv)
+    assert f'pip install "sb3-twodrl[{extra}]"' in str(exit_info.value.code) and blocked in str(exit_info.value.code)
+    assert list(tmp_path.iterdir()) == []  # no work started: no logs, no output file
+
+
+def test_enjoy_record_without_moviepy_says_so(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setitem(sys.modules, "moviepy", None)
+    with pytest.raises(SystemExit, match="moviepy not installed: --record needs it, pip install moviepy"):
+        cli.enjoy(["--algo", "a2c", "--env", "CartPole-v1", "--record", "-o", "videos"])
+
+
+def test_installed_commands_point_at_the_cli() -> None:
+    pyproject = (ROOT / "pyproject.toml").read_text()
+    for line in (
+        'sb3-twodrl-train = "sb3_twodrl.cli:train"',
+        'sb3-twodrl-enjoy = "sb3_twodrl.cli:enjoy"',
+        'sb3-twodrl-export = "sb3_twodrl.export:main"',
+    ):
+        assert line in pyproject.splitlines()
+
+
+@pytest.mark.parametrize(
+    ("argv", "added"),
+    [
+        (
+            ["--algo", "twoda2c", "--env", "NomadOffice-v0"],
+            ["--conf-file", str(hyperparams_path("twoda2c")), "--num-threads", "1"],
+        ),
+        (
+            ["--algo", "twoda2c", "--env", "NomadOffice-v0", "--num-threads", "2"],
+            ["--conf-file", str(hyperparams_path("twoda2c"))],
+        ),
+        (["--algo", "a2c", "--env", "CartPole-v1", "-conf", "mine.yml"], ["--num-threads", "1"]),
+        (["--algo", "dqn", "--env", "CartPole-v1"], ["--num-threads", "1"]),  # not packaged: rl-zoo3's own file
+    ],
+)
+def test_train_defaults_to_the_packaged_file_and_one_thread(argv, added, monkeypatch):
+    import sb3_twodrl.zoo
+
+    seen: list[list[str]] = []
+    monkeypatch.setattr(sb3_twodrl.zoo, "run_zoo_entry", lambda prog, argv, entry: seen.append(argv))
+    cli.train(argv)
+    assert seen == [[*argv, *added]]

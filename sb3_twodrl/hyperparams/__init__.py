@@ -1,20 +1,35 @@
-"""The protocol's hyperparameters, shipped with the package: ``<algo>.yml`` in rl-zoo3's format, one entry per env.
+"""The packaged hyperparameters: ``<algo>.yml`` in rl-zoo3's format, one entry per env.
 
-Every reader (the console commands, ``scripts/train.py``, the tests) finds them with :func:`hyperparams_path`
-and reads an env's entry with :func:`read_entry`; there is no default entry.
+:func:`load` gives an env's entry ready for the algorithm's constructor::
+
+    from sb3_twodrl import TwoDimA2C, hyperparams
+    hp = hyperparams.load("twoda2c", "NomadOffice-v0")
+    model = TwoDimA2C(hp.policy, make_vec_env("NomadOffice-v0", n_envs=hp.n_envs), **hp.kwargs)
+    model.learn(hp.n_timesteps, callback=hp.callbacks())
+
+The console commands and the bench find the files with :func:`hyperparams_path` and read an entry as
+written with :func:`read_entry`; there is no default entry.
 """
 
 from __future__ import annotations
 
+import importlib
 import os
+from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
 import yaml
 
+__all__ = ["PACKAGED", "Hyperparams", "hyperparams_path", "load", "read_entry"]
+
 PACKAGED = ("a2c", "ppo", "twoda2c", "twodppo")
 """The algorithms this package ships a file for."""
+
+_SCHEDULED = ("learning_rate", "clip_range", "clip_range_vf")
+_NOT_CONSTRUCTOR = ("n_envs", "n_timesteps", "policy", "normalize", "callback")
+_ZOO_ONLY = ("env_wrapper", "vec_env_wrapper", "frame_stack", "monitor_kwargs", "env_kwargs", "eval_env_kwargs")
 
 
 def hyperparams_path(algo: str, directory: str | os.PathLike | None = None) -> Path:
@@ -44,3 +59,94 @@ def read_entry(path: str | os.PathLike, env_id: str) -> dict[str, Any]:
     if env_id not in conf:
         raise ValueError(f"{path} has no entry for {env_id!r} (its entries: {', '.join(conf)})")
     return dict(conf[env_id])
+
+
+@dataclass(frozen=True)
+class Hyperparams:
+    """One env's entry, split as a training script uses it (what rl-zoo3's ``train`` does with it).
+
+    ``TwoDimA2C(policy, env, **kwargs)`` on a VecEnv of ``n_envs`` envs (wrapped in
+    ``VecNormalize(env, **normalize)`` when ``normalize`` is not None), then ``learn(n_timesteps,
+    callback=callbacks())``.
+    """
+
+    algo: str
+    env_id: str
+    policy: str
+    kwargs: dict[str, Any]
+    """Constructor arguments: ``policy_kwargs`` evaluated, ``lin_<x>`` schedules as callables."""
+    n_envs: int
+    n_timesteps: int
+    normalize: dict[str, Any] | None
+    """``VecNormalize`` arguments (``gamma`` the algorithm's, as rl-zoo3 sets it); None: no normalisation."""
+    callback: tuple[Any, ...]
+    """The entry's callbacks as written: class paths, or ``{class path: kwargs}``."""
+
+    def callbacks(self) -> list[Any]:
+        """New instances of the entry's callbacks (rl-zoo3's format)."""
+        made = []
+        for spec in self.callback:
+            name, kwargs = next(iter(spec.items())) if isinstance(spec, dict) else (spec, {})
+            module, _, cls = name.rpartition(".")
+            made.append(getattr(importlib.import_module(module), cls)(**kwargs))
+        return made
+
+
+def _evaluate(text: str) -> Any:
+    """A Python expression of a hyperparameter file, evaluated as rl-zoo3 does (``nn`` and ``th`` in scope)."""
+    import torch as th
+    from torch import nn
+
+    return eval(text, {"nn": nn, "th": th, "torch": th})
+
+
+def _schedule(key: str, value: Any) -> Any:
+    if not isinstance(value, str):
+        return value
+    kind, _, start = value.partition("_")
+    if kind not in ("lin", "linear"):
+        raise ValueError(f"{key}: unknown schedule {value!r} (rl-zoo3's format: 'lin_<initial value>')")
+    from stable_baselines3.common.utils import LinearSchedule
+
+    return LinearSchedule(float(start), 0.0, 1.0)  # rl-zoo3's SimpleLinearSchedule: initial * progress_remaining
+
+
+def load(algo: str, env_id: str, directory: str | os.PathLike | None = None) -> Hyperparams:
+    """The ``env_id`` entry of ``<algo>.yml`` (the packaged file, or the one in ``directory``), ready to train.
+
+    :raises ValueError: naming ``algo`` or ``env_id`` and what exists, if there is no such file or entry,
+        or if the entry uses an rl-zoo3 key this function does not apply (train it with ``sb3-twodrl-train``)
+    """
+    if directory is None and algo not in PACKAGED:
+        raise ValueError(f"algo {algo!r} has no packaged hyperparameters (packaged: {', '.join(PACKAGED)})")
+    path = hyperparams_path(algo, directory)
+    entry = read_entry(path, env_id)
+    zoo_only = [key for key in _ZOO_ONLY if key in entry]
+    if zoo_only:
+        raise ValueError(f"{path}, {env_id}: {', '.join(zoo_only)} is applied by rl-zoo3 only (sb3-twodrl-train)")
+    kwargs = {key: value for key, value in entry.items() if key not in _NOT_CONSTRUCTOR}
+    for key in _SCHEDULED:
+        if key in kwargs:
+            kwargs[key] = _schedule(key, kwargs[key])
+    if isinstance(kwargs.get("policy_kwargs"), str):
+        kwargs["policy_kwargs"] = _evaluate(kwargs["policy_kwargs"])
+    normalize = entry.get("normalize", False)
+    if isinstance(normalize, str):
+        normalize = _evaluate(normalize)
+    if normalize is True:
+        normalize = {}
+    elif normalize is False:
+        normalize = None
+    if normalize is not None and "gamma" in kwargs:
+        normalize = {**normalize, "gamma": kwargs["gamma"]}
+    callback = entry.get("callback") or []
+    return Hyperparams(
+        algo=algo,
+        env_id=env_id,
+        policy=entry.get("policy", "MlpPolicy"),
+        kwargs=kwargs,
+        n_envs=int(entry.get("n_envs", 1)),
+        n_timesteps=int(float(entry["n_timesteps"])),
+        normalize=normalize,
+        callback=tuple(callback if isinstance(callback, list) else [callback]),  # one callback or a list
+    )
