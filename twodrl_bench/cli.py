@@ -67,8 +67,15 @@ def status(root: Path) -> str:
     return "\n".join(lines) if lines else f"no run folder (spec.yml) under {root}"
 
 
+BENCH_MODULES = ("pandas", "scipy", "matplotlib")
+"""What the ``bench`` extra installs and every study's rows, intervals and figures need."""
+
+
 def main(argv: list[str] | None = None) -> None:
+    from sb3_twodrl.cli import require_extra
+
     args = parse_args(argv)
+    require_extra("bench", *BENCH_MODULES)
     if args.command == "run":
         from twodrl_bench.runner import run_study
 
