@@ -13,7 +13,6 @@ so that ``forward`` and ``evaluate_actions`` return exactly what SB3's do (teste
 import inspect
 
 import torch as th
-from gymnasium import spaces
 from stable_baselines3.common.policies import ActorCriticPolicy
 from stable_baselines3.common.torch_layers import MlpExtractor
 from stable_baselines3.common.type_aliases import PyTorchObs, Schedule
@@ -111,41 +110,3 @@ def build_optimizer(policy: ActorCriticPolicy, lr_schedule: Schedule) -> th.opti
     if "foreach" in inspect.signature(policy.optimizer_class).parameters:
         kwargs.setdefault("foreach", True)
     return policy.optimizer_class(policy.parameters(), lr=lr_schedule(1), **kwargs)
-
-
-class FastForwardMixin:
-    """``forward`` and ``evaluate_actions`` of an ``ActorCriticPolicy`` by :func:`latents` and, for
-    ``Discrete`` actions, the categorical formulas above: SB3's results, bit for bit."""
-
-    action_space: spaces.Space
-    action_net: nn.Module
-    value_net: nn.Module
-
-    def _categorical(self) -> bool:
-        return isinstance(self.action_space, spaces.Discrete)
-
-    def forward(self, obs: th.Tensor, deterministic: bool = False) -> tuple[th.Tensor, th.Tensor, th.Tensor]:
-        if not self._categorical():
-            return super().forward(obs, deterministic)  # type: ignore[misc]
-        latent_pi, latent_vf = latents(self, obs)  # type: ignore[arg-type]
-        values = linear(self.value_net, latent_vf)
-        log_probs = normalized(linear(self.action_net, latent_pi))
-        actions = th.argmax(F.softmax(log_probs, dim=-1), dim=1) if deterministic else categorical_sample(log_probs)
-        return actions, values, categorical_log_prob(log_probs, actions)
-
-    def evaluate_actions(self, obs: PyTorchObs, actions: th.Tensor) -> tuple[th.Tensor, th.Tensor, th.Tensor | None]:
-        if not self._categorical():
-            return super().evaluate_actions(obs, actions)  # type: ignore[misc]
-        latent_pi, latent_vf = latents(self, obs)  # type: ignore[arg-type]
-        log_probs = normalized(linear(self.action_net, latent_pi))
-        values = linear(self.value_net, latent_vf)
-        return values, categorical_log_prob(log_probs, actions), categorical_entropy(log_probs)
-
-
-class FastActorCriticPolicy(FastForwardMixin, ActorCriticPolicy):
-    """SB3's ``ActorCriticPolicy`` (the ``MlpPolicy`` of A2C and PPO) with :class:`FastForwardMixin` and
-    a multi-tensor optimizer (:func:`build_optimizer`)."""
-
-    def _build(self, lr_schedule: Schedule) -> None:
-        super()._build(lr_schedule)
-        self.optimizer = build_optimizer(self, lr_schedule)
