@@ -4,7 +4,7 @@
 
 Each pair trains on the same env id, n_envs, seed and stock arguments (the algorithms' defaults) in this
 process (DummyVecEnv, one torch thread). ``a2c``/``ppo`` pair the 2D-RL algorithm with stock SB3 (what
-a user sees); ``a2c-fast``/``ppo-fast`` with the experiments' stock arms, SB3's numbers on the same fast
+a user sees); ``a2c-fast``/``ppo-fast`` with the bench's stock arms, SB3's numbers on the same fast
 path as the 2D-RL algorithms (``twodrl_bench.baselines``): the cost of the 2D parts alone.
 Throughput is env steps per second of this process's CPU
 time, so other load on a shared machine does not skew it; runs alternate (A2C, TwoDimA2C, PPO,

@@ -208,6 +208,8 @@ class TwoDimOnPolicyMixin(BatchInfosMixin):
         """The score stored with each action (PPO's ``old_log_prob``), as :meth:`_evaluate_actions` scores it
         with the rollout's parameters, so that PPO's ratio is 1 at the first epoch: the ``log_prob`` under
         the tempered distribution that drew it (eq. 9), 0 for an action drawn uniformly (``1/T = 0``)."""
+        if inverse_temperature.all():  # no uniform draw (the algorithms' own temperatures are never 0)
+            return log_prob
         return log_prob * th.as_tensor(inverse_temperature > 0, device=log_prob.device)
 
     def _evaluate_actions(
