@@ -5,39 +5,81 @@
 Each pair trains on the same env id, n_envs, seed and stock arguments (the algorithms' defaults) in this
 process (DummyVecEnv, one torch thread). ``a2c``/``ppo`` pair the 2D-RL algorithm with stock SB3 (what
 a user sees); ``a2c-fast``/``ppo-fast`` with the bench's stock arms, SB3's numbers on the same fast
-path as the 2D-RL algorithms (``twodrl_bench.baselines``): the cost of the 2D parts alone.
+path as the 2D-RL algorithms (``twodrl_bench.baselines``): the cost of the 2D parts alone;
+``a2c-layer``/``ppo-layer`` the 2D-RL algorithm on the library's speed layer against itself with the layer
+switched off (SB3's module calls, SB3's ``CategoricalDistribution``, a per-parameter optimizer, numpy's
+statistics; the same parameters bit for bit, ``tests/test_fast.py``): the layer's gain.
+``--batched`` runs on the bench's batched envs (``twodrl_bench.vec_env.make_train_env``) instead of DummyVecEnv.
 Throughput is env steps per second of this process's CPU
 time, so other load on a shared machine does not skew it; runs alternate (A2C, TwoDimA2C, PPO,
 TwoDimPPO, A2C, ...) and the median of the repeats is reported.
 """
 
 import argparse
+import contextlib
 import statistics
 import time
+from collections.abc import Iterator
 
+import numpy as np
 import torch as th
 from stable_baselines3 import A2C, PPO
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.env_util import make_vec_env
+from stable_baselines3.common.utils import explained_variance
 
 import envs  # noqa: F401  (registers the Nomad office ids)
+import sb3_twodrl.common.fast as fast
+import sb3_twodrl.common.on_policy as on_policy
+import sb3_twodrl.common.policies as policies
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
 from twodrl_bench.baselines import BatchedA2C, BatchedPPO
+from twodrl_bench.vec_env import make_train_env
 
 PAIRS: dict[str, tuple[type[BaseAlgorithm], type[BaseAlgorithm]]] = {
     "a2c": (A2C, TwoDimA2C),
     "ppo": (PPO, TwoDimPPO),
     "a2c-fast": (BatchedA2C, TwoDimA2C),
     "ppo-fast": (BatchedPPO, TwoDimPPO),
+    "a2c-layer": (TwoDimA2C, TwoDimA2C),
+    "ppo-layer": (TwoDimPPO, TwoDimPPO),
 }
+"""Each pair: (baseline, measured); in the ``-layer`` pairs the baseline runs with the speed layer off."""
 TARGET = 0.9
+WITHOUT_LAYER = " (no layer)"
+
+_LAYER_OFF = [
+    (fast, "_plain_extractor", lambda policy: False),
+    (policies, "linear", lambda layer, x: layer(x)),
+    (policies.TwoDimPolicyMixin, "_categorical", lambda self: False),
+    (policies, "build_optimizer", lambda p, lr: p.optimizer_class(p.parameters(), lr=lr(1), **p.optimizer_kwargs)),
+    (on_policy, "fast_mean", lambda x: float(np.mean(x))),
+    (on_policy, "fast_explained_variance", lambda p, t: explained_variance(p.ravel(), t.ravel())),
+]
 
 
-def steps_per_second(algo: type[BaseAlgorithm], env_id: str, n_envs: int, steps: int, seed: int) -> float:
-    model = algo("MlpPolicy", make_vec_env(env_id, n_envs=n_envs, seed=seed), seed=seed, device="cpu")
-    start = time.process_time()
-    model.learn(steps)
-    return model.num_timesteps / (time.process_time() - start)
+@contextlib.contextmanager
+def speed_layer_off() -> Iterator[None]:
+    """The 2D-RL algorithms on SB3's module calls and distribution, a per-parameter optimizer, numpy's statistics."""
+    saved = [(owner, name, getattr(owner, name)) for owner, name, _ in _LAYER_OFF]
+    for owner, name, value in _LAYER_OFF:
+        setattr(owner, name, value)
+    try:
+        yield
+    finally:
+        for owner, name, value in saved:
+            setattr(owner, name, value)
+
+
+def steps_per_second(
+    algo: type[BaseAlgorithm], env_id: str, n_envs: int, steps: int, seed: int, batched: bool, layer: bool = True
+) -> float:
+    with contextlib.nullcontext() if layer else speed_layer_off():
+        env = make_train_env(env_id, n_envs, seed) if batched else make_vec_env(env_id, n_envs=n_envs, seed=seed)
+        model = algo("MlpPolicy", env, seed=seed, device="cpu")
+        start = time.process_time()
+        model.learn(steps)
+        return model.num_timesteps / (time.process_time() - start)
 
 
 def main() -> None:
@@ -48,22 +90,33 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--pairs", nargs="+", choices=sorted(PAIRS), default=["a2c", "ppo", "a2c-fast", "ppo-fast"])
+    parser.add_argument("--batched", action="store_true", help="the bench's batched envs instead of DummyVecEnv")
     args = parser.parse_args()
     th.set_num_threads(1)
 
-    algos = list(dict.fromkeys(algo for pair in args.pairs for algo in PAIRS[pair]))
-    rates: dict[str, list[float]] = {algo.__name__: [] for algo in algos}
-    for _ in range(args.repeats):
-        for algo in algos:
-            rates[algo.__name__].append(steps_per_second(algo, args.env, args.n_envs, args.steps, args.seed))
-    medians = {name: statistics.median(runs) for name, runs in rates.items()}
-    print(f"env={args.env} n_envs={args.n_envs} steps={args.steps} seed={args.seed} repeats={args.repeats}")
-    for name, runs in rates.items():
-        listed = ", ".join(f"{rate:.0f}" for rate in runs)
-        print(f"{name:10s} {medians[name]:10.0f} env steps per CPU second  (runs: {listed})")
+    runs = {}  # name -> (algo, with the speed layer)
     for pair in args.pairs:
-        stock, two_dim = (algo.__name__ for algo in PAIRS[pair])
-        print(f"ratio {two_dim} / {stock} = {medians[two_dim] / medians[stock]:.3f}  (target >= {TARGET})")
+        baseline, measured = PAIRS[pair]
+        layer_pair = pair.endswith("-layer")
+        runs[baseline.__name__ + (WITHOUT_LAYER if layer_pair else "")] = (baseline, not layer_pair)
+        runs[measured.__name__] = (measured, True)
+    rates: dict[str, list[float]] = {name: [] for name in runs}
+    for _ in range(args.repeats):
+        for name, (algo, layer) in runs.items():
+            rate = steps_per_second(algo, args.env, args.n_envs, args.steps, args.seed, args.batched, layer)
+            rates[name].append(rate)
+    medians = {name: statistics.median(values) for name, values in rates.items()}
+    print(f"env={args.env} n_envs={args.n_envs} steps={args.steps} seed={args.seed} repeats={args.repeats}")
+    for name, values in rates.items():
+        listed = ", ".join(f"{rate:.0f}" for rate in values)
+        print(f"{name:21s} {medians[name]:10.0f} env steps per CPU second  (runs: {listed})")
+    for pair in args.pairs:
+        baseline, measured = (algo.__name__ for algo in PAIRS[pair])
+        if pair.endswith("-layer"):
+            ratio = medians[measured] / medians[baseline + WITHOUT_LAYER]
+            print(f"ratio {measured} / {measured} without the speed layer = {ratio:.3f}")
+        else:
+            print(f"ratio {measured} / {baseline} = {medians[measured] / medians[baseline]:.3f}  (target >= {TARGET})")
 
 
 if __name__ == "__main__":
