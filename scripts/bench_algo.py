@@ -8,7 +8,8 @@ a user sees); ``a2c-fast``/``ppo-fast`` with the bench's stock arms, SB3's numbe
 path as the 2D-RL algorithms (``twodrl_bench.baselines``): the cost of the 2D parts alone;
 ``a2c-layer``/``ppo-layer`` the 2D-RL algorithm on the library's speed layer against itself with the layer
 switched off (SB3's module calls, SB3's ``CategoricalDistribution``, a per-parameter optimizer, numpy's
-statistics; the same parameters bit for bit, ``tests/test_fast.py``): the layer's gain.
+statistics; the same parameters bit for bit, ``tests/test_fast.py``): the layer's gain; ``a2c-infos`` the
+same with each step's infos made a list of dicts instead of ``BatchInfos`` (a batched env's, so with ``--batched``).
 ``--batched`` runs on the bench's batched envs (``twodrl_bench.vec_env.make_train_env``) instead of DummyVecEnv.
 Throughput is env steps per second of this process's CPU
 time, so other load on a shared machine does not skew it; runs alternate (A2C, TwoDimA2C, PPO,
@@ -27,6 +28,8 @@ from stable_baselines3 import A2C, PPO
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.utils import explained_variance
+from stable_baselines3.common.vec_env import VecEnv
+from stable_baselines3.common.vec_env.base_vec_env import VecEnvStepReturn
 
 import envs  # noqa: F401  (registers the Nomad office ids)
 import sb3_twodrl.common.fast as fast
@@ -43,10 +46,11 @@ PAIRS: dict[str, tuple[type[BaseAlgorithm], type[BaseAlgorithm]]] = {
     "ppo-fast": (BatchedPPO, TwoDimPPO),
     "a2c-layer": (TwoDimA2C, TwoDimA2C),
     "ppo-layer": (TwoDimPPO, TwoDimPPO),
+    "a2c-infos": (TwoDimA2C, TwoDimA2C),
 }
-"""Each pair: (baseline, measured); in the ``-layer`` pairs the baseline runs with the speed layer off."""
+"""Each pair: (baseline, measured); in those of :data:`SWITCHED_OFF` the baseline runs without that part."""
+SWITCHED_OFF = {"a2c-layer": "speed layer", "ppo-layer": "speed layer", "a2c-infos": "BatchInfos"}
 TARGET = 0.9
-WITHOUT_LAYER = " (no layer)"
 
 _LAYER_OFF = [
     (fast, "_plain_extractor", lambda policy: False),
@@ -71,11 +75,25 @@ def speed_layer_off() -> Iterator[None]:
             setattr(owner, name, value)
 
 
+def with_dict_infos(env: VecEnv) -> VecEnv:
+    """``env`` whose steps return their infos as a list of dicts (what a ``VecEnv`` without ``BatchInfos`` builds)."""
+    step_wait = env.step_wait
+
+    def step_wait_with_dicts() -> VecEnvStepReturn:
+        observations, rewards, dones, infos = step_wait()
+        return observations, rewards, dones, [dict(info) for info in infos]
+
+    env.step_wait = step_wait_with_dicts  # type: ignore[method-assign]
+    return env
+
+
 def steps_per_second(
-    algo: type[BaseAlgorithm], env_id: str, n_envs: int, steps: int, seed: int, batched: bool, layer: bool = True
+    algo: type[BaseAlgorithm], env_id: str, n_envs: int, steps: int, seed: int, batched: bool, off: str | None = None
 ) -> float:
-    with contextlib.nullcontext() if layer else speed_layer_off():
+    with speed_layer_off() if off == "speed layer" else contextlib.nullcontext():
         env = make_train_env(env_id, n_envs, seed) if batched else make_vec_env(env_id, n_envs=n_envs, seed=seed)
+        if off == "BatchInfos":
+            env = with_dict_infos(env)
         model = algo("MlpPolicy", env, seed=seed, device="cpu")
         start = time.process_time()
         model.learn(steps)
@@ -94,29 +112,28 @@ def main() -> None:
     args = parser.parse_args()
     th.set_num_threads(1)
 
-    runs = {}  # name -> (algo, with the speed layer)
+    def baseline_name(pair: str) -> str:
+        name = PAIRS[pair][0].__name__
+        return f"{name} (no {SWITCHED_OFF[pair]})" if pair in SWITCHED_OFF else name
+
+    runs: dict[str, tuple[type[BaseAlgorithm], str | None]] = {}  # name -> (algo, the part switched off)
     for pair in args.pairs:
-        baseline, measured = PAIRS[pair]
-        layer_pair = pair.endswith("-layer")
-        runs[baseline.__name__ + (WITHOUT_LAYER if layer_pair else "")] = (baseline, not layer_pair)
-        runs[measured.__name__] = (measured, True)
+        runs[baseline_name(pair)] = (PAIRS[pair][0], SWITCHED_OFF.get(pair))
+        runs[PAIRS[pair][1].__name__] = (PAIRS[pair][1], None)
     rates: dict[str, list[float]] = {name: [] for name in runs}
     for _ in range(args.repeats):
-        for name, (algo, layer) in runs.items():
-            rate = steps_per_second(algo, args.env, args.n_envs, args.steps, args.seed, args.batched, layer)
+        for name, (algo, off) in runs.items():
+            rate = steps_per_second(algo, args.env, args.n_envs, args.steps, args.seed, args.batched, off)
             rates[name].append(rate)
     medians = {name: statistics.median(values) for name, values in rates.items()}
     print(f"env={args.env} n_envs={args.n_envs} steps={args.steps} seed={args.seed} repeats={args.repeats}")
     for name, values in rates.items():
         listed = ", ".join(f"{rate:.0f}" for rate in values)
-        print(f"{name:21s} {medians[name]:10.0f} env steps per CPU second  (runs: {listed})")
+        print(f"{name:26s} {medians[name]:10.0f} env steps per CPU second  (runs: {listed})")
     for pair in args.pairs:
-        baseline, measured = (algo.__name__ for algo in PAIRS[pair])
-        if pair.endswith("-layer"):
-            ratio = medians[measured] / medians[baseline + WITHOUT_LAYER]
-            print(f"ratio {measured} / {measured} without the speed layer = {ratio:.3f}")
-        else:
-            print(f"ratio {measured} / {baseline} = {medians[measured] / medians[baseline]:.3f}  (target >= {TARGET})")
+        baseline, measured = baseline_name(pair), PAIRS[pair][1].__name__
+        target = "" if pair in SWITCHED_OFF else f"  (target >= {TARGET})"
+        print(f"ratio {measured} / {baseline} = {medians[measured] / medians[baseline]:.3f}{target}")
 
 
 if __name__ == "__main__":
