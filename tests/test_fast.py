@@ -1,11 +1,17 @@
-"""The fast path (sb3_twodrl.common.fast, .infos) gives stock SB3's numbers bit for bit."""
+"""The speed layer (sb3_twodrl.common.fast, .infos, .utils) changes no number: the 2D-RL algorithms with and without
+it, and the bench's stock arms on it against stock SB3, learn the same parameters bit for bit."""
 
 import numpy as np
 import pytest
 import torch as th
 from stable_baselines3 import A2C, PPO
+from stable_baselines3.common.utils import explained_variance
 
 import envs  # noqa: F401  (registers the Nomad ids)
+import sb3_twodrl.common.fast as fast
+import sb3_twodrl.common.on_policy as on_policy
+import sb3_twodrl.common.policies as policies
+from sb3_twodrl import TwoDimA2C, TwoDimPPO
 from sb3_twodrl.callbacks import EpisodeTracker
 from sb3_twodrl.common.infos import BatchInfos
 from twodrl_bench.baselines import BatchedA2C, BatchedPPO
@@ -34,6 +40,34 @@ def test_fast_stock_algorithm_learns_sb3s_parameters_bitwise(stock, fast, env_id
     _assert_same_parameters(expected.policy, actual.policy)
     obs = np.stack([actual.env.observation_space.sample() for _ in range(7)])
     assert np.array_equal(expected.predict(obs, deterministic=True)[0], actual.predict(obs, deterministic=True)[0])
+
+
+def switch_the_speed_layer_off(monkeypatch: pytest.MonkeyPatch) -> None:
+    """SB3's module calls, SB3's ``CategoricalDistribution``, a per-parameter optimizer and numpy's statistics."""
+    monkeypatch.setattr(fast, "_plain_extractor", lambda policy: False)
+    monkeypatch.setattr(policies, "linear", lambda layer, x: layer(x))
+    monkeypatch.setattr(policies.TwoDimPolicyMixin, "_categorical", lambda self: False)
+    monkeypatch.setattr(
+        policies, "build_optimizer", lambda p, lr: p.optimizer_class(p.parameters(), lr=lr(1), **p.optimizer_kwargs)
+    )
+    monkeypatch.setattr(on_policy, "fast_mean", lambda x: float(np.mean(x)))
+    monkeypatch.setattr(on_policy, "fast_explained_variance", lambda p, t: explained_variance(p.ravel(), t.ravel()))
+
+
+@pytest.mark.parametrize(
+    "algo, env_id, kwargs",
+    [(TwoDimA2C, "CartPole-v1", {}), (TwoDimA2C, "Pendulum-v1", {}), (TwoDimPPO, "CartPole-v1", PPO_ARGS)],
+)
+def test_the_speed_layer_changes_no_number_of_the_2d_algorithms(
+    monkeypatch: pytest.MonkeyPatch, algo: type, env_id: str, kwargs: dict
+) -> None:
+    fast_model = algo("MlpPolicy", env_id, seed=4, device="cpu", **kwargs).learn(400)
+    with monkeypatch.context() as patch:
+        switch_the_speed_layer_off(patch)
+        plain_model = algo("MlpPolicy", env_id, seed=4, device="cpu", **kwargs).learn(400)
+        assert not isinstance(plain_model.policy.optimizer.defaults.get("foreach"), bool)
+    _assert_same_parameters(plain_model.policy, fast_model.policy)
+    np.testing.assert_array_equal(plain_model.rollout_buffer.actions, fast_model.rollout_buffer.actions)
 
 
 def test_fast_a2c_on_the_batched_office_matches_sb3_bitwise() -> None:

@@ -1,5 +1,5 @@
 """SB3's own contract, as SB3's tests state it (``tests/test_save_load.py::test_save_load_policy``,
-``tests/test_identity.py::test_discrete``), with the 2D-RL algorithms and their variants standing in."""
+``tests/test_identity.py::test_discrete``), with the 2D-RL algorithms standing in."""
 
 import inspect
 import io
@@ -25,7 +25,6 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
 from sb3_twodrl.common.policies import TEMPERATURE_ARGUMENTS, TwoDimPolicyMixin
-from twodrl_bench.variants import VariantTwoDimA2C, VariantTwoDimPPO
 
 ALGOS = (TwoDimA2C, TwoDimPPO)
 
@@ -38,9 +37,16 @@ def make_env(policy_str: str, discrete: bool) -> gym.Env:
     return IdentityEnv(10) if discrete else IdentityEnvBox(-10, 10)
 
 
-def policy_save_load(tmp_path: Path, model_class: type, policy_str: str, discrete: bool, **kwargs) -> None:
+def policy_save_load(
+    tmp_path: Path,
+    model_class: type,
+    policy_str: str,
+    discrete: bool,
+    settings_names: tuple[str, ...] = TEMPERATURE_ARGUMENTS,
+    **kwargs,
+) -> None:
     """SB3's ``test_save_load_policy``: random parameters survive ``policy.save`` and ``Policy.load``, and so
-    do the deterministic actions (and, here, the sampling distribution's temperature settings)."""
+    do the deterministic actions (and, here, the policy's constructor settings ``settings_names``)."""
     kwargs = dict(policy_kwargs=dict(net_arch=[16]), learning_rate=1e-3, **kwargs)
     if issubclass(model_class, TwoDimPPO):
         kwargs.update(n_steps=64, n_epochs=1, batch_size=32)
@@ -73,9 +79,8 @@ def policy_save_load(tmp_path: Path, model_class: type, policy_str: str, discret
         assert th.allclose(params[key], new_params[key]), key
     new_selected_actions, _ = policy.predict(observations, deterministic=True)
     assert np.allclose(selected_actions, new_selected_actions, 1e-4)
-    for name in ("temperature", "min_temperature", "max_temperature", "interest", "preferences"):
-        if name in settings:
-            assert getattr(policy, name) == settings[name], name
+    for name in settings_names:
+        assert getattr(policy, name) == settings[name], name
     assert (policy.interest_net is None) == (model.policy.interest_net is None)
     policy.predict(observations, deterministic=False)  # the tempered distribution of the loaded policy
 
@@ -90,18 +95,6 @@ def test_save_load_policy(tmp_path: Path, model_class: type, policy_str: str, di
 @pytest.mark.parametrize("model_class", ALGOS)
 def test_save_load_policy_with_gsde_and_a_fixed_temperature(tmp_path: Path, model_class: type) -> None:
     policy_save_load(tmp_path, model_class, "MlpPolicy", False, use_sde=True, temperature=0.7, min_temperature=0.2)
-
-
-@pytest.mark.parametrize(
-    ("model_class", "kwargs"),
-    [
-        (VariantTwoDimA2C, dict(interest="paper", actor_update="preference")),
-        (VariantTwoDimA2C, dict(interest="relative", preferences="bounded", preference_bound=2.5)),
-        (VariantTwoDimPPO, dict(interest="learned", preferences="bounded", actor_update="log_prob")),
-    ],
-)
-def test_save_load_policy_of_the_variants(tmp_path: Path, model_class: type, kwargs: dict) -> None:
-    policy_save_load(tmp_path, model_class, "MlpPolicy", True, **kwargs)
 
 
 IDENTITY_ENVS = [
@@ -156,13 +149,13 @@ def strip_format(path: Path) -> None:
     path.write_bytes(buffer.getvalue())
 
 
-@pytest.mark.parametrize("model_class", [*ALGOS, VariantTwoDimA2C])
+@pytest.mark.parametrize("model_class", ALGOS)
 def test_loading_a_file_of_the_old_layout_says_so(tmp_path: Path, model_class: type) -> None:
     kwargs = dict(n_steps=16, batch_size=16) if issubclass(model_class, TwoDimPPO) else {}
     model_class("MlpPolicy", "CartPole-v1", seed=0, **kwargs).save(tmp_path / "m.zip")
     model_class.load(tmp_path / "m.zip")  # the current layout loads
     strip_format(tmp_path / "m.zip")
-    with pytest.raises(ValueError, match=r"saved by an older sb3-twodrl.*interest, preferences, preference_bound"):
+    with pytest.raises(ValueError, match=r"saved by an older sb3-twodrl.*retrain, or load it with the version"):
         model_class.load(tmp_path / "m.zip")
 
 
@@ -187,13 +180,3 @@ def test_one_set_of_defaults() -> None:
     policy = inspect.signature(TwoDimPolicyMixin.__init__).parameters
     for name in TEMPERATURE_ARGUMENTS:
         assert policy[name].default == added[TwoDimA2C][name], name
-
-
-@pytest.mark.parametrize(("variant", "core"), [(VariantTwoDimA2C, TwoDimA2C), (VariantTwoDimPPO, TwoDimPPO)])
-def test_the_shipped_class_refuses_a_variants_file(tmp_path: Path, variant: type, core: type) -> None:
-    kwargs = dict(n_steps=16, batch_size=16) if variant is VariantTwoDimPPO else {}
-    model = variant("MlpPolicy", "CartPole-v1", seed=0, interest="paper", actor_update="tempered", **kwargs)
-    model.save(tmp_path / "v")
-    assert variant.load(tmp_path / "v").actor_update == "tempered"
-    with pytest.raises(ValueError, match=rf"ablation variant \(actor_update='tempered'\).*Variant{core.__name__}"):
-        core.load(tmp_path / "v")

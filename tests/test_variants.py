@@ -10,11 +10,13 @@ from gymnasium.wrappers import TimeLimit
 from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
+from sb3_twodrl.common.policies import TEMPERATURE_ARGUMENTS
+from tests.test_sb3_contract import policy_save_load, strip_format
 from tests.toy_envs import LatticeCorridor
 from twodrl_bench.algos import algo_class
 from twodrl_bench.runner import run_study
 from twodrl_bench.spec import load_spec, settings_algo
-from twodrl_bench.variants import VariantTwoDimA2C, VariantTwoDimPPO
+from twodrl_bench.variants import VARIANT_ARGUMENTS, VariantActorCriticPolicy, VariantTwoDimA2C, VariantTwoDimPPO
 
 FIGURES = Path(__file__).resolve().parents[1] / "results" / "ablation"
 BASE = {"a2c": {"n_envs": 2, "n_steps": 8}, "twoda2c": {"n_envs": 2, "n_steps": 8, "punishment_gamma": 0.1}}
@@ -74,6 +76,43 @@ def test_the_tabular_oracle_setting() -> None:
     model.learn(64)
     assert model.policy.interest_net is None and model.policy.interest == "paper"
     assert model.policy.inverse_temperature(np.zeros(1)) == 0  # an interest of 0 (a first move): uniform
+
+
+@pytest.mark.parametrize(
+    ("model_class", "kwargs"),
+    [
+        (VariantTwoDimA2C, dict(interest="paper", actor_update="preference")),
+        (VariantTwoDimA2C, dict(interest="relative", preferences="bounded", preference_bound=2.5)),
+        (VariantTwoDimPPO, dict(interest="learned", preferences="bounded", actor_update="log_prob")),
+    ],
+)
+def test_save_load_policy_of_the_variants(tmp_path: Path, model_class: type, kwargs: dict) -> None:
+    policy_save_load(tmp_path, model_class, "MlpPolicy", True, (*TEMPERATURE_ARGUMENTS, *VARIANT_ARGUMENTS), **kwargs)
+
+
+def test_loading_a_variants_file_of_the_old_layout_says_so(tmp_path: Path) -> None:
+    VariantTwoDimA2C("MlpPolicy", "CartPole-v1", seed=0).save(tmp_path / "m.zip")
+    VariantTwoDimA2C.load(tmp_path / "m.zip")  # the current layout loads
+    strip_format(tmp_path / "m.zip")
+    with pytest.raises(ValueError, match="saved by an older sb3-twodrl"):
+        VariantTwoDimA2C.load(tmp_path / "m.zip")
+
+
+@pytest.mark.parametrize(("variant", "core"), [(VariantTwoDimA2C, TwoDimA2C), (VariantTwoDimPPO, TwoDimPPO)])
+@pytest.mark.parametrize("interest", ["paper", "learned"])
+def test_the_shipped_class_refuses_a_variants_file(tmp_path: Path, variant: type, core: type, interest: str) -> None:
+    kwargs = dict(n_steps=16, batch_size=16) if variant is VariantTwoDimPPO else {}
+    model = variant("MlpPolicy", "CartPole-v1", seed=0, interest=interest, actor_update="tempered", **kwargs)
+    model.save(tmp_path / "v")
+    assert variant.load(tmp_path / "v").actor_update == "tempered"
+    with pytest.raises(ValueError, match=r"VariantActorCriticPolicy needs interest.*loaded with their load"):
+        core.load(tmp_path / "v")
+
+
+def test_a_variant_policy_needs_its_settings() -> None:
+    env = LatticeCorridor()
+    with pytest.raises(ValueError, match="needs interest, preferences and preference_bound"):
+        VariantActorCriticPolicy(env.observation_space, env.action_space, lambda _: 1e-3)
 
 
 ROWS = [  # (arm, committed results file, seed): one row per kind of variant, its epoch 1

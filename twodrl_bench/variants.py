@@ -38,20 +38,22 @@ from typing import Any, ClassVar
 import numpy as np
 import torch as th
 from gymnasium import spaces
+from stable_baselines3.common.distributions import DiagGaussianDistribution, StateDependentNoiseDistribution
 from stable_baselines3.common.policies import BasePolicy
-from stable_baselines3.common.type_aliases import PyTorchObs
+from stable_baselines3.common.type_aliases import PyTorchObs, Schedule
 from torch import nn
 
 from sb3_twodrl.a2c import TwoDimA2C
+from sb3_twodrl.common.fast import build_optimizer
 from sb3_twodrl.common.interest import relative_interest
 from sb3_twodrl.common.policies import (
-    _GAUSSIANS,
     TwoDimActorCriticCnnPolicy,
     TwoDimActorCriticPolicy,
     TwoDimMultiInputPolicy,
     TwoDimPolicyMixin,
     two_dim_policy_class,
 )
+from sb3_twodrl.common.utils import fast_mean
 from sb3_twodrl.common.validation import check_positive
 from sb3_twodrl.ppo import TwoDimPPO
 
@@ -64,6 +66,7 @@ INTEREST_EMA_RATE = 0.1
 """Weight of the newest rollout's mean interest in the ``"paper"`` mode's running estimate used by ``predict``."""
 VARIANT_ARGUMENTS = ("interest", "preferences", "preference_bound")
 """The variant policy's constructor arguments that the variant algorithms take as their own."""
+_GAUSSIANS = (DiagGaussianDistribution, StateDependentNoiseDistribution)
 
 
 def check_variant(interest: str, preferences: str, preference_bound: float) -> None:
@@ -83,16 +86,29 @@ def bounded_preferences(logits: th.Tensor, bound: float = PREFERENCE_BOUND) -> t
 
 class VariantPolicyMixin(TwoDimPolicyMixin):
     """The 2D-RL policy with the ``interest`` and ``preferences`` modes of this module (constructor
-    arguments, saved with the policy) and ``V_P``'s orthogonal initialisation."""
+    arguments, saved with the policy) and ``V_P``'s orthogonal initialisation, on the policy's extension
+    points: ``_build`` (``V_P``'s initialisation; no ``I(s)`` head but in ``"learned"``, so that the
+    rollout passes each transition's ``delta+``), :meth:`inverse_temperature`,
+    :meth:`action_preferences` and :meth:`update_interest_scale`.
+
+    The three arguments have no defaults in the policy: the variant algorithms always pass them, so a
+    variant's file loaded by ``TwoDimA2C``/``TwoDimPPO`` (which do not) is refused by name.
+    """
 
     def __init__(
         self,
         *args: Any,
-        interest: str = "learned",
-        preferences: str = "raw",
-        preference_bound: float = PREFERENCE_BOUND,
+        interest: str | None = None,
+        preferences: str | None = None,
+        preference_bound: float | None = None,
         **kwargs: Any,
     ):
+        if interest is None or preferences is None or preference_bound is None:
+            raise ValueError(
+                f"{type(self).__name__} needs interest, preferences and preference_bound (got {interest!r}, "
+                f"{preferences!r}, {preference_bound!r}): it is built by VariantTwoDimA2C or VariantTwoDimPPO; "
+                "a file of theirs is loaded with their load"
+            )
         check_variant(interest, preferences, preference_bound)
         self.interest = interest
         self.preferences = preferences
@@ -104,11 +120,18 @@ class VariantPolicyMixin(TwoDimPolicyMixin):
         data.update({name: getattr(self, name) for name in VARIANT_ARGUMENTS})
         return data
 
-    def _needs_interest_head(self) -> bool:
-        return self.interest == "learned" and super()._needs_interest_head()
-
-    def _init_punishment_head(self, head: nn.Linear) -> None:
-        """Keep the orthogonal initialisation of :meth:`_new_head` (the arms' rows ran with it)."""
+    def _build(self, lr_schedule: Schedule) -> None:
+        """``V_P`` orthogonally initialised (gain 1) as SB3's value head, from the same random state as the
+        library's zero head (the arms' rows ran with it); no ``I(s)`` head but in ``"learned"``."""
+        super()._build(lr_schedule)
+        with th.random.fork_rng(devices=[]):
+            head = nn.Linear(self.mlp_extractor.latent_dim_vf, 1)
+            if self.ortho_init:
+                head.apply(functools.partial(self.init_weights, gain=1))  # type: ignore[attr-defined]
+        self.punishment_value_net = head
+        if self.interest != "learned":
+            self.interest_net = None
+        self.optimizer = build_optimizer(self, lr_schedule)  # type: ignore[arg-type]
 
     def inverse_temperature(self, interest: np.ndarray) -> np.ndarray:
         """``"paper"``/``"relative"``: ``1 / T`` of the transition's ``delta+`` (relative: over its running
@@ -125,16 +148,17 @@ class VariantPolicyMixin(TwoDimPolicyMixin):
             inverse *= interest > 0
         return inverse
 
-    def _preferences(self, action_logits: th.Tensor) -> th.Tensor:
+    def action_preferences(self, latent_pi: th.Tensor) -> th.Tensor:
+        preferences = super().action_preferences(latent_pi)
         if self.preferences == "bounded":
-            return bounded_preferences(action_logits, self.preference_bound)
-        return action_logits
+            return bounded_preferences(preferences, self.preference_bound)
+        return preferences
 
     def update_interest_scale(self, interest: np.ndarray, dones: np.ndarray) -> None:
         if self.interest != "paper":  # "paper" keeps a per-rollout estimate in the same buffer
             super().update_interest_scale(interest, dones)
 
-    def update_running_interest(self, mean_interest: float) -> None:
+    def update_rollout_interest(self, mean_interest: float) -> None:
         """``"paper"``: fold one rollout's mean interest into the estimate that ``predict`` uses."""
         if self.interest != "paper":
             return
@@ -189,14 +213,19 @@ def scored_actions(
 
 
 class VariantMixin:
-    """The variant arguments of an algorithm: stored, validated, passed to the policy, the score chosen."""
+    """The variant arguments of an algorithm: stored, validated, passed to the policy, the score chosen
+    (the algorithms' extension points ``_policy_two_dim_kwargs`` and ``_evaluate_actions``), and the
+    ``"paper"`` mode's per-rollout estimate of the interest updated after each rollout."""
 
     actor_updates: ClassVar[tuple[str, ...]] = ACTOR_UPDATES
     policy: Any
     action_space: spaces.Space
+    rollout_buffer: Any
 
     def __init__(
         self,
+        policy: str | type,
+        env: Any,
         *args: Any,
         interest: str = "learned",
         preferences: str = "raw",
@@ -211,12 +240,9 @@ class VariantMixin:
         self.preferences = preferences
         self.preference_bound = preference_bound
         self.actor_update = actor_update
-        super().__init__(*args, **kwargs)
+        super().__init__(policy if isinstance(policy, str) else variant_policy_class(policy), env, *args, **kwargs)
         if actor_update == "preference" and not isinstance(self.action_space, spaces.Discrete):
             raise ValueError(f"actor_update='preference' needs Discrete actions, got {self.action_space}")
-
-    def _two_dim_policy_class(self, policy_class: type) -> type:
-        return variant_policy_class(policy_class)
 
     def _policy_two_dim_kwargs(self) -> dict[str, Any]:
         kwargs = super()._policy_two_dim_kwargs()  # type: ignore[misc]
@@ -226,6 +252,13 @@ class VariantMixin:
         self, observations: Any, actions: th.Tensor, inverse_temperatures: th.Tensor
     ) -> tuple[th.Tensor, th.Tensor, th.Tensor | None, th.Tensor, th.Tensor | None]:
         return scored_actions(self.policy, observations, actions, inverse_temperatures, self.actor_update)
+
+    def collect_rollouts(self, *args: Any, **kwargs: Any) -> bool:
+        """The algorithm's rollout; after a complete one, its mean interest goes to the ``"paper"`` estimate."""
+        complete = super().collect_rollouts(*args, **kwargs)  # type: ignore[misc]
+        if complete:
+            self.policy.update_rollout_interest(fast_mean(self.rollout_buffer.interests))
+        return complete
 
 
 _VARIANT_POLICIES: dict[str, type[BasePolicy]] = {
@@ -250,16 +283,16 @@ class VariantTwoDimPPO(VariantMixin, TwoDimPPO):
     policy_aliases: ClassVar[dict[str, type[BasePolicy]]] = _VARIANT_POLICIES
     actor_updates: ClassVar[tuple[str, ...]] = ("log_prob", "tempered", "compensated", "compensated_skip_uniform")
 
-    def _rollout_log_probs(self, latent_pi: th.Tensor, actions: th.Tensor, tempered: th.Tensor) -> th.Tensor:
-        """``"log_prob"``: under the raw preferences (``T = 1``), the policy being optimised."""
+    def _rollout_log_prob(
+        self, latent_pi: th.Tensor, actions: th.Tensor, log_prob: th.Tensor, inverse_temperature: np.ndarray
+    ) -> th.Tensor:
+        """``"log_prob"``: under the raw preferences (``T = 1``), the policy being optimised; ``"tempered"``
+        and ``"compensated"``: the tempered ``log_prob``, also for a uniform draw, as they score it."""
         if self.actor_update == "log_prob":
             return self.policy._get_action_dist_from_latent(latent_pi).log_prob(actions)
-        return super()._rollout_log_probs(latent_pi, actions, tempered)
-
-    def _old_log_prob(self, rollout_data: Any) -> th.Tensor:
-        if self.actor_update == "compensated_skip_uniform":
-            return super()._old_log_prob(rollout_data)
-        return rollout_data.old_log_prob
+        if self.actor_update in ("tempered", "compensated"):
+            return log_prob
+        return super()._rollout_log_prob(latent_pi, actions, log_prob, inverse_temperature)
 
 
 VARIANT_ALGOS: dict[str, type] = {"twoda2c_variant": VariantTwoDimA2C, "twodppo_variant": VariantTwoDimPPO}

@@ -12,7 +12,7 @@ from stable_baselines3.common.vec_env import VecNormalize
 
 class TwoDimRolloutBufferSamples(NamedTuple):
     """SB3's rollout samples (``advantages`` being the utility) plus the punishment critic's old values and
-    target, the interest ``delta+`` of each sample's transition (the ``"learned"`` interest head's target) and the
+    target, the interest ``delta+`` of each sample's transition (the interest head ``I(s)``'s target) and the
     inverse temperature its action was drawn with (eq. 9)."""
 
     observations: PyTorchObs

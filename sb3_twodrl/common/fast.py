@@ -6,14 +6,20 @@ At 64 envs a rollout step of a small MLP policy costs more in Python than in ari
 properties) costs as much as a layer's matmul. :func:`latents` runs SB3's ``MlpExtractor`` layer by
 layer with ``torch.nn.functional`` (any other extractor, or a module with hooks, through its own
 ``forward``); :func:`categorical_sample`, :func:`categorical_log_prob` and :func:`categorical_entropy`
-are ``Categorical``'s own formulas. :class:`FastForwardMixin` gives an ``ActorCriticPolicy`` both,
-so that ``forward`` and ``evaluate_actions`` return exactly what SB3's do (tested bitwise).
+are ``Categorical``'s own formulas; :func:`build_optimizer` makes the optimizer multi-tensor. The 2D-RL
+policy's rollout and update run on them.
+
+Measured gain, with :mod:`sb3_twodrl.common.utils`' statistics: ``TwoDimA2C``/``TwoDimPPO`` against
+themselves with SB3's module calls, SB3's ``CategoricalDistribution``, a per-parameter optimizer and
+numpy's statistics (the same parameters bit for bit, ``tests/test_fast.py``), env steps per CPU second,
+one torch thread, alternating runs, median of 3, on a loaded 2-core machine (``scripts/bench_algo.py
+--pairs a2c-layer ppo-layer``; ``docs/benchmarks.md``): TwoDimA2C 1.23x and TwoDimPPO 1.22x on
+CartPole-v1 (8 envs, defaults), TwoDimA2C 1.20x on the batched NomadOffice-v0 (64 envs).
 """
 
 import inspect
 
 import torch as th
-from gymnasium import spaces
 from stable_baselines3.common.policies import ActorCriticPolicy
 from stable_baselines3.common.torch_layers import MlpExtractor
 from stable_baselines3.common.type_aliases import PyTorchObs, Schedule
@@ -111,41 +117,3 @@ def build_optimizer(policy: ActorCriticPolicy, lr_schedule: Schedule) -> th.opti
     if "foreach" in inspect.signature(policy.optimizer_class).parameters:
         kwargs.setdefault("foreach", True)
     return policy.optimizer_class(policy.parameters(), lr=lr_schedule(1), **kwargs)
-
-
-class FastForwardMixin:
-    """``forward`` and ``evaluate_actions`` of an ``ActorCriticPolicy`` by :func:`latents` and, for
-    ``Discrete`` actions, the categorical formulas above: SB3's results, bit for bit."""
-
-    action_space: spaces.Space
-    action_net: nn.Module
-    value_net: nn.Module
-
-    def _categorical(self) -> bool:
-        return isinstance(self.action_space, spaces.Discrete)
-
-    def forward(self, obs: th.Tensor, deterministic: bool = False) -> tuple[th.Tensor, th.Tensor, th.Tensor]:
-        if not self._categorical():
-            return super().forward(obs, deterministic)  # type: ignore[misc]
-        latent_pi, latent_vf = latents(self, obs)  # type: ignore[arg-type]
-        values = linear(self.value_net, latent_vf)
-        log_probs = normalized(linear(self.action_net, latent_pi))
-        actions = th.argmax(F.softmax(log_probs, dim=-1), dim=1) if deterministic else categorical_sample(log_probs)
-        return actions, values, categorical_log_prob(log_probs, actions)
-
-    def evaluate_actions(self, obs: PyTorchObs, actions: th.Tensor) -> tuple[th.Tensor, th.Tensor, th.Tensor | None]:
-        if not self._categorical():
-            return super().evaluate_actions(obs, actions)  # type: ignore[misc]
-        latent_pi, latent_vf = latents(self, obs)  # type: ignore[arg-type]
-        log_probs = normalized(linear(self.action_net, latent_pi))
-        values = linear(self.value_net, latent_vf)
-        return values, categorical_log_prob(log_probs, actions), categorical_entropy(log_probs)
-
-
-class FastActorCriticPolicy(FastForwardMixin, ActorCriticPolicy):
-    """SB3's ``ActorCriticPolicy`` (the ``MlpPolicy`` of A2C and PPO) with :class:`FastForwardMixin` and
-    a multi-tensor optimizer (:func:`build_optimizer`)."""
-
-    def _build(self, lr_schedule: Schedule) -> None:
-        super()._build(lr_schedule)
-        self.optimizer = build_optimizer(self, lr_schedule)

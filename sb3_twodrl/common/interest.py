@@ -13,9 +13,8 @@ recent transitions' interest (:data:`INTEREST_SCALE_RATE`), so that ``T = 1`` me
 surprise, whatever the size of the rewards or how settled the critics are; clamped to
 ``[min_temperature, max_temperature]``.
 
-Eq. 9 taken literally (``T = delta+`` of the transition into the state), the relative interest of
-that transition and preferences of bounded spread are ablation variants:
-:mod:`twodrl_bench.variants`.
+A policy without the head gets each transition's ``delta+`` instead (eq. 9 as written), and a subclass
+may map it to ``1 / T`` otherwise: :class:`~sb3_twodrl.common.policies.TwoDimPolicyMixin`, its extension points.
 """
 
 import numpy as np

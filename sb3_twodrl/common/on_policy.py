@@ -36,7 +36,8 @@ from sb3_twodrl.common.validation import (
 
 SAVE_FORMAT = 2
 """Layout of a saved 2D-RL algorithm: 2 since the temperature settings are the policy's constructor
-arguments and the ablation variants left the algorithms; files without it are refused by ``load``."""
+arguments and the algorithms take no ``interest``, ``preferences``, ``preference_bound`` or ``actor_update``;
+files without it are refused by ``load``."""
 
 
 class TwoDimOnPolicyMixin(BatchInfosMixin):
@@ -45,6 +46,18 @@ class TwoDimOnPolicyMixin(BatchInfosMixin):
 
     The algorithm's ``__init__`` calls :meth:`_init_two_dim` before SB3's ``__init__``. See
     ``TwoDimA2C`` for the arguments.
+
+    Extension points (``docs/design.md``, "Extension points"), beside SB3's own (``collect_rollouts``,
+    ``_setup_model``, ...) and the policy's (:class:`~sb3_twodrl.common.policies.TwoDimPolicyMixin`):
+
+    - :meth:`_policy_two_dim_kwargs`: the policy's constructor arguments that the algorithm takes as
+      its own (a subclass adding policy arguments adds them here, and they are saved with the algorithm).
+    - :meth:`_evaluate_actions`: the critics and the actor's score of a minibatch, which the utility
+      multiplies (eq. 10) or, in PPO, whose difference from the rollout's is the log-ratio.
+    - :meth:`_rollout_log_prob`: the score stored with each action during the rollout (PPO's ``old_log_prob``).
+
+    An ``ActorCriticPolicy`` subclass passed as ``policy`` that is not a 2D-RL policy yet becomes one by
+    :func:`~sb3_twodrl.common.policies.two_dim_policy_class`; a ``TwoDimPolicyMixin`` subclass is used as it is.
     """
 
     # SB3's OnPolicyAlgorithm attributes that the mixin uses
@@ -117,14 +130,11 @@ class TwoDimOnPolicyMixin(BatchInfosMixin):
         # Set by the constructor, or by ``load`` from the file (None if the file has none: an older layout)
         self._two_dim_format = SAVE_FORMAT if _init_setup_model else None
         self._carried_interest: tuple[Any, np.ndarray] | None = None
-        return policy if isinstance(policy, str) else self._two_dim_policy_class(policy)
-
-    def _two_dim_policy_class(self, policy_class: type) -> type:
-        """The 2D-RL version of a user's ``ActorCriticPolicy`` subclass."""
-        return two_dim_policy_class(policy_class)
+        return policy if isinstance(policy, str) else two_dim_policy_class(policy)
 
     def _policy_two_dim_kwargs(self) -> dict[str, Any]:
-        """The policy's constructor arguments that are the algorithm's own (eq. 9's temperature settings)."""
+        """The policy's constructor arguments that are the algorithm's own (eq. 9's temperature settings):
+        passed to the policy beside ``policy_kwargs``, which must not hold them."""
         return {name: getattr(self, name) for name in TEMPERATURE_ARGUMENTS}
 
     def _setup_model(self) -> None:
@@ -137,16 +147,9 @@ class TwoDimOnPolicyMixin(BatchInfosMixin):
         if self._two_dim_format != SAVE_FORMAT:  # only ``load`` of a file saved by an older version gets here
             raise ValueError(
                 f"this file was saved by an older sb3-twodrl (no save format, this version writes {SAVE_FORMAT}) and "
-                f"cannot be loaded by {type(self).__name__}: the arguments interest, preferences, preference_bound "
-                "and actor_update left the algorithms (ablation variants: twodrl_bench.variants), the "
-                "temperature settings moved into the policy and the punishment critic starts at 0; retrain, or "
-                "load it with the version that saved it"
-            )
-        if "actor_update" in vars(self) and not hasattr(type(self), "actor_updates"):  # a variant's saved data
-            raise ValueError(
-                f"this file was saved by an ablation variant (actor_update={vars(self)['actor_update']!r}), whose "
-                f"training {type(self).__name__} would not reproduce: load it with "
-                f"twodrl_bench.variants.Variant{type(self).__name__}"
+                f"cannot be loaded by {type(self).__name__}: the temperature settings moved into the policy, the "
+                "punishment critic starts at 0 and the algorithms no longer take interest, preferences, "
+                "preference_bound or actor_update; retrain, or load it with the version that saved it"
             )
         if self.rollout_buffer_class is None:
             is_dict = isinstance(self.observation_space, spaces.Dict)
@@ -199,16 +202,22 @@ class TwoDimOnPolicyMixin(BatchInfosMixin):
             return np.zeros(self.n_envs, dtype=np.float32)
         return carried[1]
 
-    def _rollout_log_probs(self, latent_pi: th.Tensor, actions: th.Tensor, tempered: th.Tensor) -> th.Tensor:
-        """The ``old_log_prob`` stored with each action: its log-probability ``tempered`` under the
-        tempered distribution that drew it (eq. 9), so that PPO's ratio is 1 at the first epoch."""
-        return tempered
+    def _rollout_log_prob(
+        self, latent_pi: th.Tensor, actions: th.Tensor, log_prob: th.Tensor, inverse_temperature: np.ndarray
+    ) -> th.Tensor:
+        """The score stored with each action (PPO's ``old_log_prob``), as :meth:`_evaluate_actions` scores it
+        with the rollout's parameters, so that PPO's ratio is 1 at the first epoch: the ``log_prob`` under
+        the tempered distribution that drew it (eq. 9), 0 for an action drawn uniformly (``1/T = 0``)."""
+        if inverse_temperature.all():  # no uniform draw (the algorithms' own temperatures are never 0)
+            return log_prob
+        return log_prob * th.as_tensor(inverse_temperature > 0, device=log_prob.device)
 
     def _evaluate_actions(
         self, observations: Any, actions: th.Tensor, inverse_temperatures: th.Tensor
     ) -> tuple[th.Tensor, th.Tensor, th.Tensor | None, th.Tensor, th.Tensor | None]:
-        """``V_R``, ``V_P``, ``I(s)``, the actor's score and the entropy of a minibatch (the policy's
-        :meth:`~sb3_twodrl.common.policies.TwoDimPolicyMixin.evaluate_actions_two_dim`)."""
+        """``V_R``, ``V_P``, ``I(s)`` (None without the head), the actor's score of ``actions`` and the entropy
+        (None: the algorithm uses ``-score``) of a minibatch: the policy's
+        :meth:`~sb3_twodrl.common.policies.TwoDimPolicyMixin.evaluate_actions_two_dim`."""
         return self.policy.evaluate_actions_two_dim(observations, actions, inverse_temperatures)
 
     def collect_rollouts(
@@ -246,7 +255,7 @@ class TwoDimOnPolicyMixin(BatchInfosMixin):
                 self.policy.reset_noise(env.num_envs)
             with th.no_grad():
                 actions, log_probs = self.policy.sample_tempered(latent_pi, inverse_temperature)
-                log_probs = self._rollout_log_probs(latent_pi, actions, log_probs)
+                log_probs = self._rollout_log_prob(latent_pi, actions, log_probs, inverse_temperature)
             actions = actions.cpu().numpy().reshape((-1, *self.action_space.shape))  # type: ignore[misc]
 
             clipped_actions = actions
@@ -309,7 +318,6 @@ class TwoDimOnPolicyMixin(BatchInfosMixin):
             last_values=values, dones=dones, last_punishment_values=punishment_values
         )
         self._carried_interest = (new_obs, interest)
-        self.policy.update_running_interest(fast_mean(rollout_buffer.interests))  # type: ignore[attr-defined]
 
         callback.update_locals(locals())
         callback.on_rollout_end()

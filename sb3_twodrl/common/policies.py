@@ -84,6 +84,17 @@ class TwoDimPolicyMixin:
     It relies only on what every ``ActorCriticPolicy`` has: ``mlp_extractor`` (``forward_actor``,
     ``forward_critic``, ``latent_dim_vf``), ``action_net``, ``value_net`` and ``action_dist``.
 
+    Extension points (``docs/design.md``, "Extension points"), each a method a subclass overrides,
+    as SB3's policies are extended through ``_build`` and ``_get_action_dist_from_latent``:
+
+    - :meth:`action_preferences`: the preferences ``p(s, .)`` that ``T`` divides (eq. 9).
+    - :meth:`inverse_temperature`: ``1 / T`` from an interest; a value of 0 draws the action uniformly,
+      and such an action scores 0 in the actor's update (:meth:`evaluate_actions_two_dim`).
+    - :meth:`update_interest_scale`: what each rollout step's interest updates (``running_interest``).
+    - ``interest_net``: a subclass whose ``_build`` leaves it None gets, during rollouts, each
+      transition's ``delta+`` into the state (eq. 9 as written; 0 after a reset) as the interest,
+      and ``predict`` gets ``running_interest``; with the head, both get its ``I(s)``.
+
     :param temperature: ``"interest"`` (eq. 9, ``T`` set by the interest) or a fixed positive temperature
     :param min_temperature: floor of the interest temperature
     :param max_temperature: ceiling of the interest temperature
@@ -120,15 +131,6 @@ class TwoDimPolicyMixin:
         data.update({name: getattr(self, name) for name in TEMPERATURE_ARGUMENTS})
         return data
 
-    def _needs_interest_head(self) -> bool:
-        """Whether ``I(s)`` sets the temperature (not at a fixed temperature)."""
-        return self.temperature == "interest"
-
-    def _init_punishment_head(self, head: nn.Linear) -> None:
-        """``V_P`` starts at 0: no punishment expected before one is seen."""
-        nn.init.zeros_(head.weight)
-        nn.init.zeros_(head.bias)
-
     def _new_head(self) -> nn.Linear:
         """A linear head on the critic's latent, orthogonally initialised (gain 1) as SB3's value head."""
         head = nn.Linear(self.mlp_extractor.latent_dim_vf, 1)
@@ -140,9 +142,10 @@ class TwoDimPolicyMixin:
         super()._build(lr_schedule)  # type: ignore[misc]
         with th.random.fork_rng(devices=[]):
             self.punishment_value_net = self._new_head()
-            self._init_punishment_head(self.punishment_value_net)
+        nn.init.zeros_(self.punishment_value_net.weight)  # no punishment expected before one is seen
+        nn.init.zeros_(self.punishment_value_net.bias)
         self.interest_net: nn.Module | None = None
-        if self._needs_interest_head():
+        if self.temperature == "interest":
             with th.random.fork_rng(devices=[]):
                 self.interest_net = self._new_head()
         self.register_buffer("running_interest", th.zeros(()))  # type: ignore[attr-defined]
@@ -198,9 +201,9 @@ class TwoDimPolicyMixin:
         interest = relative_interest(np.maximum(interest, 0.0), self.running_interest.item())
         return np.reciprocal(np.minimum(np.maximum(interest, self.min_temperature), self.max_temperature))
 
-    def _preferences(self, action_logits: th.Tensor) -> th.Tensor:
-        """What ``T`` divides in eq. 9: the actor's outputs (categorical actions)."""
-        return action_logits
+    def action_preferences(self, latent_pi: th.Tensor) -> th.Tensor:
+        """The preferences ``p(s, .)`` that ``T`` divides in eq. 9 (categorical actions): the action net's outputs."""
+        return linear(self.action_net, latent_pi)
 
     def tempered_distribution(
         self, latent_pi: th.Tensor, inverse_temperature: np.ndarray | th.Tensor, compensated: bool = False
@@ -227,7 +230,7 @@ class TwoDimPolicyMixin:
     ) -> th.Tensor:
         """The preferences times ``1 / T`` (eq. 9) of a categorical policy (see :meth:`tempered_distribution`)."""
         inverse = th.as_tensor(inverse_temperature, device=latent_pi.device).reshape(-1, 1)
-        preferences = self._preferences(linear(self.action_net, latent_pi))
+        preferences = self.action_preferences(latent_pi)
         if compensated:
             return preferences.detach() * inverse + (preferences - preferences.detach())
         return preferences * inverse
@@ -251,9 +254,6 @@ class TwoDimPolicyMixin:
     def update_interest_scale(self, interest: np.ndarray, dones: np.ndarray) -> None:
         """Fold one vectorised step's interest into the running mean of ``delta+`` that scales ``I(s)``."""
         self.running_interest.fill_(updated_scale(self.running_interest.item(), interest, dones))
-
-    def update_running_interest(self, mean_interest: float) -> None:
-        """Called with each rollout's mean interest; the default keeps no per-rollout estimate."""
 
     def _actor_latent(self, obs: PyTorchObs) -> th.Tensor:
         features = BaseModel.extract_features(self, obs, self.pi_features_extractor)  # type: ignore[arg-type]

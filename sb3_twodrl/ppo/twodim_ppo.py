@@ -152,10 +152,6 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
             _init_setup_model=_init_setup_model,
         )
 
-    def _old_log_prob(self, rollout_data: Any) -> th.Tensor:
-        """The rollout's log-probabilities, 0 (ratio 1, as the score) for the actions drawn uniformly."""
-        return rollout_data.old_log_prob * (rollout_data.inverse_temperatures > 0)
-
     def train(self) -> None:
         """PPO's epochs of minibatch updates: clipped surrogate on the utility, each critic on its own target."""
         self.policy.set_training_mode(True)
@@ -178,7 +174,7 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
                 values, punishment_values, predicted, log_prob, entropy = self._evaluate_actions(
                     rollout_data.observations, actions, rollout_data.inverse_temperatures
                 )
-                old_log_prob = self._old_log_prob(rollout_data)
+                old_log_prob = rollout_data.old_log_prob
                 advantages = rollout_data.advantages
                 if self.normalize_advantage and len(advantages) > 1:  # SB3 GitHub issue #325
                     advantages = (advantages - advantages.mean()) / (advantages.std() + 1e-8)
