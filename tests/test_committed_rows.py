@@ -1,0 +1,58 @@
+"""The README's main study rerun gives the committed rows (issue 43): its first epoch, seed 0, both algorithms.
+
+The bench runs MKL's reproducible kernels (``MKL_CBWR=COMPATIBLE``, :mod:`twodrl_bench.machine`), so the rows do not
+depend on the CPU's instruction set; this checks that on whatever x86-64 CPU runs the tests. Without MKL (another
+architecture) torch takes other kernels and the rows are not expected to be equal: skipped.
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+import platform
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import torch
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+COMMITTED = ROOT / "results" / "quick_preset" / "rows.csv"
+TIMINGS = ("wall_s",)
+
+
+def read(path: Path, seed: int, epochs: int) -> list[dict[str, str]]:
+    with path.open(newline="") as f:
+        rows = [r for r in csv.DictReader(f) if int(r["seed"]) == seed and int(r["epoch"]) <= epochs]
+    return sorted(
+        ({k: v for k, v in r.items() if k not in TIMINGS} for r in rows), key=lambda r: (r["arm"], r["epoch"])
+    )
+
+
+@pytest.mark.skipif(
+    platform.machine().lower() not in ("x86_64", "amd64") or not torch.backends.mkl.is_available(),
+    reason="the committed rows were made with MKL's reproducible kernels on x86-64",
+)
+def test_a_fresh_run_of_the_quick_preset_gives_the_committed_rows(tmp_path: Path) -> None:
+    spec = yaml.safe_load((ROOT / "twodrl_bench" / "specs" / "quick_preset.yml").read_text())
+    spec["protocol"]["epochs"], spec["seeds"] = 1, [0]
+    (tmp_path / "spec.yml").write_text(yaml.safe_dump(spec))
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "MKL_CBWR": "COMPATIBLE", "OMP_NUM_THREADS": "1"}
+    command = [
+        sys.executable,
+        "-m",
+        "twodrl_bench.cli",
+        "run",
+        str(tmp_path / "spec.yml"),
+        "--out",
+        str(tmp_path / "run"),
+    ]
+    out = subprocess.run(
+        [*command, "--backend", "serial", "--no-report"], env=env, capture_output=True, text=True, timeout=600
+    )
+    assert out.returncode == 0, out.stderr[-3000:]
+    fresh = read(tmp_path / "run" / "rows.csv", seed=0, epochs=1)
+    assert [r["arm"] for r in fresh] == ["a2c", "twoda2c"]
+    assert fresh == read(COMMITTED, seed=0, epochs=1)
