@@ -3,7 +3,7 @@
 
 For each n_envs: one (algo, seed) run per arm (``a2c`` is SB3's A2C on the experiments' fast path,
 :mod:`twodrl_bench.baselines`) of ``--epochs`` paper-sized epochs (K learning
-trials, then M test trials, batched pipeline, exactly as ``reproduce.py`` runs them; no
+trials, then M test trials, batched pipeline, exactly as :mod:`twodrl_bench.epochs` runs them; no
 TensorBoard, checkpoints or models), timed by the process's CPU time (the machine is shared).
 Prints learning env-steps per CPU second (target >= 100,000), TwoDimA2C / A2C (target >= 0.9),
 the per-env pipeline of the old protocol (DummyVecEnv, ``--dummy-n-envs``) for comparison, and

@@ -76,7 +76,8 @@ def test_a_killed_run_resumes_with_the_uninterrupted_rows(tmp_path, algo):
 
 @pytest.mark.parametrize("algo", ["twoda2c", "a2c"])
 def test_a_shorter_runs_checkpoint_extends_to_the_longer_runs_rows(tmp_path, algo):
-    """A run extended from a shorter run's checkpoint (docs/factorial.md, amendment 7) gives the longer run's rows."""
+    """A run extended from a shorter run's checkpoint (results/factorial/preregistration.md, amendment 7) gives the
+    longer run's rows."""
     longer = run_pair(spec(tmp_path / "whole", algo, checkpoint_every=1))
     s = spec(tmp_path / "extended", algo, checkpoint_every=1)
     assert len(run_pair(replace(s, epochs=2))) == 2  # leaves its checkpoint of epoch 1

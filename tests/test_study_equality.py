@@ -1,10 +1,10 @@
-"""The study runner gives the rows of the old grid (``sb3-twodrl-reproduce``), timings aside.
+"""The study runner gives the rows of the grid runner of commit 01db862, timings aside.
 
-The old rows are made here, on the same machine, by what the old command ran for each (algo, seed):
-:func:`twodrl_bench.epochs.run_pair` (moved, unchanged) on a :class:`~twodrl_bench.protocol.RunSpec`
-built as ``reproduce.specs_from_args`` built it (the env's entry of ``<algo>.yml`` by ``load_hyperparams``,
+That grid's rows are made here, on the same machine, by what it ran for each (algo, seed):
+:func:`twodrl_bench.epochs.run_pair` (the same function) on a :class:`~twodrl_bench.protocol.RunSpec`
+built as 01db862's ``specs_from_args`` built it (the env's entry of ``<algo>.yml`` by ``load_hyperparams``,
 ``--n-envs`` over it). A committed CSV would not do: rows differ bitwise between machines. The same
-comparison against the old command itself (commit 01db862, ``scripts/reproduce.py``) on
+comparison against that commit's command itself (``scripts/reproduce.py`` there) on
 ``NomadOfficeMemorable-v0`` is in ``docs/studies.md``.
 """
 

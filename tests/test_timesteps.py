@@ -48,7 +48,7 @@ def _job(spec: dict[str, Any], arm: str, seed: int, out: Path, **protocol: Any) 
 
 @pytest.mark.parametrize("spec_name", ["benchmark/CliffWalking", "benchmark/Pendulum"])
 def test_rows_equal_the_rows_of_the_command_it_replaces(tmp_path, spec_name: str) -> None:
-    """The fixture holds rows that ``sb3-twodrl-benchmark`` made at commit 01db862 on this machine (its
+    """The fixture holds rows that commit 01db862's benchmark command made on this machine (its
     ``made_by``): the job gives the same rows from the spec, ``wall_s`` aside, bit for bit. CliffWalking covers
     the info split and its Monitor events; Pendulum the frozen ``VecNormalize`` statistics of the evaluation."""
     cases = [c for c in json.loads(OLD_ROWS.read_text())["cases"] if c["spec"] == spec_name]

@@ -1,7 +1,7 @@
 """The ablation's variants of 2D-RL (``docs/ablation.md``): what ``TwoDimA2C``/``TwoDimPPO`` do not do.
 
 :class:`VariantTwoDimA2C` and :class:`VariantTwoDimPPO` take four more arguments, each a choice that
-an ablation arm made (:data:`twodrl_bench.ablation.ARMS` selects them by arm name):
+an ablation arm made (each arm of the spec ``ablation``, ``twodrl_bench/specs/ablation.yml``, sets them):
 
 ``interest`` (what sets ``T`` in eq. 9):
 
