@@ -23,8 +23,8 @@ the raw preferences), ``"tempered"`` (``log pi_T(a|s)`` of the policy that drew 
 ``"preference"`` (eq. 10 literally: the taken action's preference ``p(s, a)``; ``VariantTwoDimA2C``
 and ``Discrete`` actions only).
 
-The variants also keep the punishment critic's orthogonal initialisation (gain 1), which every arm
-ran with before ``V_P`` started at 0, so that the committed rows reproduce. E.g. eq. 9 and eq. 10
+The variants also keep the punishment critic's orthogonal initialisation (gain 1), with which their
+committed rows were made, so that those rows reproduce (the algorithms start ``V_P`` at 0). E.g. eq. 9 and eq. 10
 as the paper writes them (the tabular oracle's setting)::
 
     VariantTwoDimA2C("MlpPolicy", env, interest="paper", actor_update="preference")
