@@ -35,7 +35,8 @@ def end_of_run(part: Part) -> str:
     for arm in part.spec["arms"]:
         if arm in per_arm:
             mean, half, n = mean_ci(per_arm[arm])
-            lines.append(f"  {arm}: {mean:.4f} ± {half:.4f} (n={n})")
+            interval = f" ± {half:.4f}" if n >= 2 else ""  # one seed: no interval
+            lines.append(f"  {arm}: {mean:.4f}{interval} (n={n})")
     a, b = compared(part)
     if len(per_arm.get(a, [])) >= 2 and len(per_arm.get(b, [])) >= 2:
         diff, half = welch_ci(per_arm[a], per_arm[b])
