@@ -35,6 +35,7 @@ from stable_baselines3.common.utils import set_random_seed
 from stable_baselines3.common.vec_env import VecEnv
 
 from sb3_twodrl.callbacks import NavigationMetricsCallback
+from sb3_twodrl.hyperparams import evaluate
 from twodrl_bench.algos import algo_class
 from twodrl_bench.checkpoint import load_checkpoint, save_checkpoint, set_rng_state
 from twodrl_bench.protocol import LEARNING, METRICS, RunSpec, trial_seed
@@ -192,15 +193,12 @@ def run_job(
     """The rows of one (arm, seed) of an epoch protocol: :func:`run_pair` of the arm's resolved settings.
 
     ``arm``: ``{"name", "algo", "hyperparams"}`` (:func:`twodrl_bench.spec.resolve`; a ``policy_kwargs``
-    string is evaluated as rl-zoo3 does); ``protocol``: ``{epochs, learn_episodes, test_episodes, vec_env,
-    checkpoint_every, save_model, tensorboard}``. Each row starts with the arm's name.
+    string is evaluated by :func:`sb3_twodrl.hyperparams.evaluate`); ``protocol``: ``{epochs, learn_episodes,
+    test_episodes, vec_env, checkpoint_every, save_model, tensorboard}``. Each row starts with the arm's name.
     """
     hyperparams = dict(arm["hyperparams"])
     if isinstance(hyperparams.get("policy_kwargs"), str):
-        import torch  # noqa: F401  (names available to eval, as rl-zoo3 does)
-        from torch import nn  # noqa: F401
-
-        hyperparams["policy_kwargs"] = eval(hyperparams["policy_kwargs"])
+        hyperparams["policy_kwargs"] = evaluate(hyperparams["policy_kwargs"])
     spec = RunSpec(
         env_id=env,
         algo=arm["algo"],

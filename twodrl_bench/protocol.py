@@ -11,7 +11,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from sb3_twodrl.hyperparams import read_entry
+from sb3_twodrl.hyperparams import evaluate, read_entry
 
 METRICS = ("goal_rate", "reward_per_step", "shortcut_share", "detour_share", "collision_rate")
 LEARNING = ("interest_share", "mean_temperature")
@@ -103,10 +103,7 @@ def load_hyperparams(path: str | Path, env_id: str) -> dict[str, Any]:
     """
     entry = {k: v for k, v in read_entry(path, env_id).items() if k not in _ZOO_ONLY}
     if isinstance(entry.get("policy_kwargs"), str):
-        import torch  # noqa: F401  (names available to eval, as rl-zoo3 does)
-        from torch import nn  # noqa: F401
-
-        entry["policy_kwargs"] = eval(entry["policy_kwargs"])
+        entry["policy_kwargs"] = evaluate(entry["policy_kwargs"])
     for key, value in entry.items():
         if isinstance(value, str) and value.startswith(("lin_", "linear_")):
             raise ValueError(f"{path}: {key} is a schedule ({value!r}); the experiment runner takes constants")

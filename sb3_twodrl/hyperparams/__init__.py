@@ -22,7 +22,7 @@ from typing import Any
 
 import yaml
 
-__all__ = ["PACKAGED", "Hyperparams", "hyperparams_path", "load", "read_entry"]
+__all__ = ["PACKAGED", "Hyperparams", "evaluate", "hyperparams_path", "load", "read_entry"]
 
 PACKAGED = ("a2c", "ppo", "twoda2c", "twodppo")
 """The algorithms this package ships a file for."""
@@ -92,7 +92,7 @@ class Hyperparams:
         return made
 
 
-def _evaluate(text: str) -> Any:
+def evaluate(text: str) -> Any:
     """A Python expression of a hyperparameter file, evaluated as rl-zoo3 does (``nn`` and ``th`` in scope)."""
     import torch as th
     from torch import nn
@@ -129,10 +129,10 @@ def load(algo: str, env_id: str, directory: str | os.PathLike | None = None) -> 
         if key in kwargs:
             kwargs[key] = _schedule(key, kwargs[key])
     if isinstance(kwargs.get("policy_kwargs"), str):
-        kwargs["policy_kwargs"] = _evaluate(kwargs["policy_kwargs"])
+        kwargs["policy_kwargs"] = evaluate(kwargs["policy_kwargs"])
     normalize = entry.get("normalize", False)
     if isinstance(normalize, str):
-        normalize = _evaluate(normalize)
+        normalize = evaluate(normalize)
     if normalize is True:
         normalize = {}
     elif normalize is False:
