@@ -24,7 +24,7 @@ PRESETS: dict[str, dict[str, int]] = {
     "quick": {"epochs": 30, "learn_episodes": 1000, "test_episodes": 100, "seeds": 5},
     "paper": {"epochs": 1000, "learn_episodes": 1000, "test_episodes": 100, "seeds": 5},
 }
-_ZOO_ONLY = ("n_timesteps", "callback", "normalize", "env_wrapper", "vec_env_wrapper", "frame_stack")
+ZOO_ONLY = ("n_timesteps", "callback", "normalize", "env_wrapper", "vec_env_wrapper", "frame_stack")
 _NOT_SETTINGS = ("policy", "env", "verbose", "seed", "device", "tensorboard_log", "_init_setup_model")
 
 
@@ -92,21 +92,35 @@ class RunSpec:
         return out
 
 
-def load_hyperparams(path: str | Path, env_id: str) -> dict[str, Any]:
-    """The ``env_id`` entry of an rl-zoo3 hyperparameter file (:func:`~sb3_twodrl.hyperparams.read_entry`).
-
-    Keys only rl-zoo3 uses (``n_timesteps``, ``callback``, ...) are dropped; a ``policy_kwargs``
-    string is evaluated as rl-zoo3 does. Schedules (``lin_...``) are rejected: an epoch protocol has
-    no total budget to schedule over.
+def epoch_entry(path: str | Path, env_id: str) -> dict[str, Any]:
+    """The ``env_id`` entry of an rl-zoo3 hyperparameter file (:func:`~sb3_twodrl.hyperparams.read_entry`) as
+    written, without the keys only rl-zoo3 uses (``n_timesteps``, ``callback``, ...).
 
     :raises ValueError: if the file does not exist or has no entry for ``env_id``
     """
-    entry = {k: v for k, v in read_entry(path, env_id).items() if k not in _ZOO_ONLY}
+    return {k: v for k, v in read_entry(path, env_id).items() if k not in ZOO_ONLY}
+
+
+def check_constants(hyperparams: dict[str, Any], where: str) -> None:
+    """Refuse a schedule (``lin_...``): an epoch protocol has no total budget to schedule over.
+
+    :raises ValueError: naming ``where``, the key and the value
+    """
+    for key, value in hyperparams.items():
+        if isinstance(value, str) and value.startswith(("lin_", "linear_")):
+            raise ValueError(f"{where}: {key} is a schedule ({value!r}); the epoch protocol takes constants")
+
+
+def load_hyperparams(path: str | Path, env_id: str) -> dict[str, Any]:
+    """:func:`epoch_entry` with a ``policy_kwargs`` string evaluated as rl-zoo3 does
+    (:func:`~sb3_twodrl.hyperparams.evaluate`) and schedules refused (:func:`check_constants`).
+
+    :raises ValueError: if the file does not exist, has no entry for ``env_id`` or holds a schedule
+    """
+    entry = epoch_entry(path, env_id)
     if isinstance(entry.get("policy_kwargs"), str):
         entry["policy_kwargs"] = evaluate(entry["policy_kwargs"])
-    for key, value in entry.items():
-        if isinstance(value, str) and value.startswith(("lin_", "linear_")):
-            raise ValueError(f"{path}: {key} is a schedule ({value!r}); the experiment runner takes constants")
+    check_constants(entry, str(path))
     return entry
 
 

@@ -26,7 +26,7 @@ from typing import Any
 
 import yaml
 
-from sb3_twodrl.hyperparams import hyperparams_path, read_entry
+from sb3_twodrl.hyperparams import hyperparams_path
 
 Spec = dict[str, Any]
 
@@ -47,8 +47,6 @@ RUN_OPTIONS = ("checkpoint_every", "save_model", "tensorboard")
 """Protocol keys that change what a run keeps, not its rows: free to change between invocations."""
 FREE = ("name", "rules", "report", "seeds")
 """Top-level fields that may change between invocations on one folder (seeds may be added)."""
-ZOO_ONLY = ("n_timesteps", "callback", "normalize", "env_wrapper", "vec_env_wrapper", "frame_stack")
-"""Keys of an rl-zoo3 entry that only rl-zoo3 reads: dropped for the epoch protocol."""
 _ARM_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.=+-]*$")
 
 
@@ -247,7 +245,7 @@ def resolve(spec: Spec) -> Spec:
 
     :raises ValueError: if a settings file or its entry for the env is missing, or (epochs) holds a schedule
     """
-    from twodrl_bench.protocol import class_defaults
+    from twodrl_bench.protocol import check_constants, class_defaults, epoch_entry
 
     out = copy.deepcopy(spec)
     epochs = "epochs" in spec["protocol"]
@@ -259,12 +257,11 @@ def resolve(spec: Spec) -> Spec:
             arm["defaults"] = class_defaults(arm["algo"], arm["hyperparams"])
             continue
         folder = None if arm["settings"] == "packaged" else arm["settings"]
-        entry = read_entry(hyperparams_path(settings_algo(arm["algo"]), folder), spec["env"])
-        entry = {k: v for k, v in entry.items() if k not in ZOO_ONLY}
-        hyperparams = {**entry, **arm["override"]}
-        for key, value in hyperparams.items():
-            if isinstance(value, str) and value.startswith(("lin_", "linear_")):
-                raise ValueError(f"arms.{name}: {key} is a schedule ({value!r}); epochs take constants")
+        hyperparams = {
+            **epoch_entry(hyperparams_path(settings_algo(arm["algo"]), folder), spec["env"]),
+            **arm["override"],
+        }
+        check_constants(hyperparams, f"arms.{name}")
         arm["hyperparams"] = hyperparams
         arm["defaults"] = class_defaults(arm["algo"], hyperparams)
     return out
