@@ -46,6 +46,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def status(root: Path) -> str:
     """One line per run folder under ``root`` (its spec.yml): jobs finished, running (epochs done) and pending."""
+    from twodrl_bench.epochs import progress_path
     from twodrl_bench.runner import read_spec, rows_path
 
     lines = []
@@ -56,7 +57,7 @@ def status(root: Path) -> str:
         done = [job for job in jobs if rows_path(folder, *job).exists()]
         running = []
         for arm, seed in jobs:
-            progress = folder / "progress" / f"{arm}_seed{seed}.txt"
+            progress = progress_path(folder, f"{arm}_seed{seed}")
             if (arm, seed) not in done and progress.exists():
                 epochs = len(progress.read_text().split())
                 running.append(f"{arm}_seed{seed} {epochs}/{spec['protocol'].get('epochs', '?')}")

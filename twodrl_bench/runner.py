@@ -150,14 +150,14 @@ def run_study(
     ``report``, the study's report (:func:`twodrl_bench.reports.report_study`) reads the run folders.
     """
     resolved = resolve(validate(spec) if isinstance(spec, dict) else load_spec(spec))
+    unknown = sorted(set(arms or []) - set(resolved["arms"]))
+    if unknown:
+        raise ValueError(f"arms must be among the spec's {list(resolved['arms'])}, got {unknown}")
     folder = Path(out) if out is not None else default_folder(resolved["name"])
     folder.mkdir(parents=True, exist_ok=True)
     guard(folder, resolved)
     for package in resolved["gym_packages"]:
         importlib.import_module(package)
-    unknown = sorted(set(arms or []) - set(resolved["arms"]))
-    if unknown:
-        raise ValueError(f"arms must be among the spec's {list(resolved['arms'])}, got {unknown}")
     jobs = pending_jobs(resolved, folder, arms)
     total = len(arms or resolved["arms"]) * len(resolved["seeds"])
     if len(jobs) < total:
