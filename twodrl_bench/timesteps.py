@@ -40,15 +40,9 @@ from typing import Any
 import numpy as np
 
 Row = dict[str, Any]
-STOCK = {
-    "twoda2c": "a2c",
-    "twodppo": "ppo",
-    "a2c_auto": "a2c",
-    "ppo_auto": "ppo",
-    "twoda2c_auto": "a2c",
-    "twodppo_auto": "ppo",
-}
-"""The stock algorithm of each 2D-RL or self-tuning-entropy algorithm: whose rl-zoo3 entry it reads."""
+STOCK = {"twoda2c": "a2c", "twodppo": "ppo"}
+"""The stock algorithm of each 2D-RL algorithm: whose rl-zoo3 entry it reads (a ``<algo>_auto`` arm: its
+``<algo>``'s, :func:`twodrl_bench.spec.settings_algo`)."""
 EVAL_SEED = 10**6
 """Seed of the evaluation env, plus the training seed: apart from the training seeds."""
 CURVE_BINS = 20
@@ -78,17 +72,18 @@ def settings_file(arm: dict[str, Any]) -> Path:
     :raises ValueError: if the file does not exist
     """
     from sb3_twodrl.hyperparams import hyperparams_path
+    from twodrl_bench.spec import settings_algo
 
-    settings = arm.get("settings", "packaged")
+    settings, algo = arm.get("settings", "packaged"), settings_algo(arm["algo"])
     if settings == "rl-zoo3":
         import rl_zoo3
 
-        algo = STOCK.get(arm["algo"], arm["algo"])
+        algo = STOCK.get(algo, algo)
         path = Path(rl_zoo3.__file__).parent / "hyperparams" / f"{algo}.yml"
         if not path.is_file():
             raise ValueError(f"settings: rl-zoo3 has no hyperparameter file for {algo!r} ({path})")
         return path
-    return hyperparams_path(arm["algo"], None if settings == "packaged" else settings)
+    return hyperparams_path(algo, None if settings == "packaged" else settings)
 
 
 def resolve_arm(arm: dict[str, Any], env: str, protocol: dict[str, Any]) -> dict[str, Any]:
