@@ -41,7 +41,6 @@ from gymnasium import spaces
 from stable_baselines3.common.distributions import DiagGaussianDistribution, StateDependentNoiseDistribution
 from stable_baselines3.common.policies import BasePolicy
 from stable_baselines3.common.type_aliases import PyTorchObs, Schedule
-from torch import nn
 
 from sb3_twodrl.a2c import TwoDimA2C
 from sb3_twodrl.common.fast import build_optimizer
@@ -125,10 +124,7 @@ class VariantPolicyMixin(TwoDimPolicyMixin):
         library's zero head (the arms' rows ran with it); no ``I(s)`` head but in ``"learned"``."""
         super()._build(lr_schedule)
         with th.random.fork_rng(devices=[]):
-            head = nn.Linear(self.mlp_extractor.latent_dim_vf, 1)
-            if self.ortho_init:
-                head.apply(functools.partial(self.init_weights, gain=1))  # type: ignore[attr-defined]
-        self.punishment_value_net = head
+            self.punishment_value_net = self._new_head()
         if self.interest != "learned":
             self.interest_net = None
         self.optimizer = build_optimizer(self, lr_schedule)  # type: ignore[arg-type]
