@@ -223,3 +223,25 @@ def test_the_studys_specs_name_their_paths_and_known_algorithms() -> None:
                 assert arm["override"]["target_entropy_fraction"] in (0.98, 0.5)
         rules = spec["rules"]
         assert {rules["claim"], *rules["against"], rules["zero"]} <= set(spec["arms"])
+
+
+@pytest.mark.parametrize("algo, kwargs", [(AutoEntropyA2C, {}), (AutoEntropyTwoDimPPO, PPO_ARGS)])
+def test_the_coefficients_course_is_kept_per_tenth_of_the_budget_and_saved(algo, kwargs, tmp_path) -> None:
+    """Each tenth of learn's budget holds its last train's step count, alpha and entropy fraction; the last
+    tenth holds the final coefficient; the course survives save and load."""
+    budget = 320  # PPO_ARGS: one rollout of 32 steps per tenth
+    model = algo(
+        "MlpPolicy", IdentityEnv(4), target_entropy_fraction=0.5, ent_coef_lr=0.01, seed=1, device="cpu", **kwargs
+    )
+    model.learn(budget)
+    course = model.ent_coef_course
+    assert all(point is not None for point in course)
+    steps = [point[0] for point in course]
+    assert steps == sorted(steps) and steps[-1] == model.num_timesteps
+    for tenth, (timesteps, _, _) in enumerate(course, start=1):
+        assert (tenth - 1) * budget / 10 < timesteps <= tenth * budget / 10
+    alphas = [point[1] for point in course]
+    assert alphas == sorted(alphas, reverse=True)  # entropy above target all along: alpha falls
+    assert all(0.5 < point[2] <= 1.0 for point in course)
+    model.save(tmp_path / "model.zip")
+    assert algo.load(tmp_path / "model.zip", device="cpu").ent_coef_course == course

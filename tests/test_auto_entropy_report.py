@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import pytest
 
 from twodrl_bench.reports.auto_entropy import report, verdict
@@ -71,3 +73,16 @@ def test_report_writes_the_table_and_refuses_missing_rules(tmp_path) -> None:
     assert "| twod0 - auto98 | +0.00 [-2.84, +2.84] | +0.000 [+0.000, +0.000] |" in text
     with pytest.raises(ValueError, match="lack"):
         report(rows, {**spec, "rules": {"claim": "twod0"}}, tmp_path)
+
+
+def test_the_course_table_reads_the_automatic_arms_courses(tmp_path) -> None:
+    """Alpha and the entropy fraction at 10%, 50% and 100%, averaged over the seeds that carry a course."""
+    spec = {"name": "auto_entropy/T", "env": "T-v0", "protocol": {"task": "T"}, "rules": RULES}
+    spec["arms"] = {arm: {} for arm in ("zero", "auto98", "auto50", "twod0")}
+    rows = [{"task": "T", "arm": "zero", "seed": 0, "final_return": 0.0, "train_events_per_episode": 0.0}]
+    for seed, alpha in ((0, 1.0), (1, 3.0)):
+        course = [[100 * (i + 1), alpha * (i + 1), 0.5] for i in range(10)]
+        rows.append({**rows[0], "arm": "auto98", "seed": seed, "ent_coef_course": json.dumps(course)})
+    text = report(rows, spec, tmp_path)
+    assert "| auto98 | 2.000 [-10.706, 14.706] (n=2) | 0.500 (n=2) | 10.000 [-53.531, 73.531] (n=2)" in text
+    assert text.count("| automatic arm |") == 1 and "| zero | 0.000 (n=1)" not in text.split("automatic arm")[1]

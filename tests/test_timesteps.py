@@ -76,6 +76,15 @@ def test_a_rerun_over_an_interrupted_attempt_gives_the_uninterrupted_row(tmp_pat
     assert row["arm"] == "twoda2c" and row["task"] == "CliffWalking" and len(json.loads(row["curve"])) == 20
 
 
+def test_a_learned_coefficients_arm_row_carries_its_course(tmp_path) -> None:
+    """An automatic arm's row holds its final model's ``ent_coef_course``, ending at the budget; a stock arm's none."""
+    spec = load_spec("auto_entropy/CliffWalking")
+    auto = _job(spec, "a2c_auto0.5", 400, tmp_path, timesteps=800, eval_episodes=1)
+    course = json.loads(auto["ent_coef_course"])
+    assert len(course) == 10 and course[-1][0] == 800 and all(point is not None for point in course)
+    assert "ent_coef_course" not in _job(spec, "a2c_ent0", 400, tmp_path, timesteps=800, eval_episodes=1)
+
+
 def test_env_kwargs_reach_training_and_evaluation(tmp_path) -> None:
     """CartPole's Sutton-Barto reward is 0 a step and -1 at the fall: no return above 0 anywhere."""
     spec = load_spec("benchmark/CartPole")

@@ -31,7 +31,10 @@ toward the target, so alpha adds a bonus only where the interest's exploration f
 classes never draw uniformly: ``1/T >= 1/max_temperature > 0``, so every entropy of the batch counts.)
 
 Each ``train`` logs ``train/ent_coef`` (mean of the coefficients used), ``train/ent_coef_loss`` and
-``train/entropy`` (mean entropy of the batches that drove alpha) beside the algorithm's own keys.
+``train/entropy`` (mean entropy of the batches that drove alpha) beside the algorithm's own keys, and keeps
+the coefficient's course through ``learn``'s budget in ``ent_coef_course`` (saved with the model): per tenth
+``d`` of the budget, ``[num_timesteps, alpha, entropy / maximum entropy]`` of the last ``train`` in it, the
+means over its batches (None for a tenth with no ``train``), so a run's course is read from its final model.
 """
 
 from __future__ import annotations
@@ -54,6 +57,8 @@ from twodrl_bench.baselines import BatchedA2C, BatchedPPO
 TARGET_FRACTION = 0.98
 """The default target, as a fraction of the maximum entropy: SAC-Discrete's ``0.98 * -log(1/|A|)``
 (Christodoulou 2019, arXiv:1910.07207)."""
+COURSE_POINTS = 10
+"""Points of ``ent_coef_course``: the coefficient at the end of each tenth of ``learn``'s budget."""
 
 
 def max_entropy(action_space: spaces.Space) -> float:
@@ -107,6 +112,7 @@ class AutoEntropyMixin:
     logger: Any
     policy: Any
     _current_progress_remaining: float
+    num_timesteps: int
 
     def _init_auto_entropy(
         self, ent_coef: float | str, target_entropy_fraction: float, ent_coef_lr: float | None
@@ -123,6 +129,7 @@ class AutoEntropyMixin:
         self.log_ent_coef_ratio: th.Tensor | None = None
         self.ent_coef_optimizer: th.optim.Adam | None = None
         self._ent_coef_stats: list[tuple[float, float, float]] = []
+        self.ent_coef_course: list[list[float] | None] = [None] * COURSE_POINTS
         return self.ent_coef_init
 
     def _setup_model(self) -> None:
@@ -170,6 +177,10 @@ class AutoEntropyMixin:
         self.logger.record("train/ent_coef", float(np.mean(coefficients)))
         self.logger.record("train/ent_coef_loss", float(np.mean(losses)))
         self.logger.record("train/entropy", float(np.mean(entropies)))
+        done = 1.0 - self._current_progress_remaining  # of learn's budget, as the schedules read it
+        point = min(COURSE_POINTS, max(1, math.ceil(COURSE_POINTS * done - 1e-9)))
+        entropy_fraction = float(np.mean(entropies)) / max_entropy(self.action_space)
+        self.ent_coef_course[point - 1] = [int(self.num_timesteps), float(np.mean(coefficients)), entropy_fraction]
 
     def _get_torch_save_params(self) -> tuple[list[str], list[str]]:
         state_dicts, variables = super()._get_torch_save_params()  # type: ignore[misc]

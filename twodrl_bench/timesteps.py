@@ -188,7 +188,8 @@ def run_job(
     The row: ``task``, ``env``, ``arm``, ``seed``, ``n_timesteps``; the final evaluation's ``final_return`` (mean),
     ``final_return_std``, ``final_length``, ``final_events`` (per episode), ``final_event_share``; over the
     training episodes ``train_episodes``, ``train_return``, ``train_events_per_episode``, ``train_event_share``;
-    ``curve`` (:func:`learning_curve` as JSON text, so that the row is flat) and ``wall_s``.
+    ``curve`` (:func:`learning_curve` as JSON text, so that the row is flat); for an arm whose entropy coefficient
+    is learned (:mod:`twodrl_bench.auto_entropy`), ``ent_coef_course`` (the final model's, as JSON text); ``wall_s``.
     """
     import torch as th
     import yaml
@@ -246,6 +247,8 @@ def run_job(
     final = evaluate(model, eval_env, protocol["eval_episodes"], events)
     eval_env.close()
     found = len(train_eps) > 0
+    learned_coefficient = getattr(model, "ent_coef_auto", False)
+    course = {"ent_coef_course": json.dumps(model.ent_coef_course)} if learned_coefficient else {}
     return [
         {
             "task": protocol.get("task") or env,
@@ -259,6 +262,7 @@ def run_job(
             "train_events_per_episode": float(train_eps[:, 2].mean()) if found else math.nan,
             "train_event_share": float(np.mean(train_eps[:, 2] > 0)) if found else math.nan,
             "curve": json.dumps(learning_curve(train_eps, budget)),
+            **course,
             "wall_s": round(time.perf_counter() - clock, 1),
         }
     ]

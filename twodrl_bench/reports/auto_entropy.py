@@ -8,12 +8,14 @@ stock arm at 0), ``fixed`` (the stock arm at its best fixed coefficient), ``pair
 descriptive differences), ``return``/``return_margin``, ``events``/``events_margin`` (row fields and margins) and
 ``min_seeds``. The claim holds if the Welch interval of (claim - reference) has its lower bound above
 ``-return_margin`` on the return and its upper bound below ``events_margin`` on the events; it is informative only
-if zero is worse than the reference (return interval wholly below 0, or events wholly above 0). Requires the
-``plots`` extra (scipy).
+if zero is worse than the reference (return interval wholly below 0, or events wholly above 0). Where the rows
+carry it, the automatic arms' coefficient course follows (:func:`course_table`). Requires the ``plots`` extra
+(scipy).
 """
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Sequence
 from pathlib import Path
@@ -24,6 +26,8 @@ from twodrl_bench.reports.benchmark import _cell, _diff, task_of, typed
 
 Row = dict[str, Any]
 Spec = dict[str, Any]
+COURSE_AT = (10, 50, 100)
+"""Percent of training at which the coefficient's course is reported (the pre-registration's points)."""
 RULE_KEYS = ("claim", "against", "zero", "fixed", "pairs", "return", "return_margin", "events", "events_margin")
 
 
@@ -86,7 +90,28 @@ def task_report(spec: Spec, rows: Sequence[Row]) -> str:
             ret = _diff(values[a]["return"], values[b]["return"], 2)
             ev = _diff(values[a]["events"], values[b]["events"], 3)
             lines.append(f"| {a} - {b} | {ret} | {ev} |")
-    return "\n".join(lines)
+    return "\n".join(lines + course_table(rows))
+
+
+def course_table(rows: Sequence[Row]) -> list[str]:
+    """The automatic arms' coefficient over seeds at 10%, 50% and 100% of training (:data:`COURSE_AT`), from
+    the rows' ``ent_coef_course`` (:mod:`twodrl_bench.auto_entropy`); no lines if no row has one."""
+    courses: dict[str, list[list[list[float]]]] = {}
+    for row in sorted(rows, key=lambda r: (r["arm"], r["seed"])):
+        text = row.get("ent_coef_course")
+        if isinstance(text, str) and text:
+            courses.setdefault(row["arm"], []).append(json.loads(text))
+    if not courses:
+        return []
+    head = " | ".join(f"alpha at {p}% | entropy / max at {p}%" for p in COURSE_AT)
+    lines = ["", f"| automatic arm | {head} |", "|---|" + "---|" * 2 * len(COURSE_AT)]
+    for arm, runs in courses.items():
+        cells = []
+        for p in COURSE_AT:
+            points = [run[p // 10 - 1] for run in runs if run[p // 10 - 1] is not None]
+            cells += [_cell([point[1] for point in points], 3), _cell([point[2] for point in points], 3)]
+        lines.append(f"| {arm} | {' | '.join(cells)} |")
+    return lines
 
 
 def report(rows: Sequence[Row], spec: Spec | Sequence[Spec], out: str | Path) -> str:
