@@ -245,3 +245,18 @@ def test_the_coefficients_course_is_kept_per_tenth_of_the_budget_and_saved(algo,
     assert all(0.5 < point[2] <= 1.0 for point in course)
     model.save(tmp_path / "model.zip")
     assert algo.load(tmp_path / "model.zip", device="cpu").ent_coef_course == course
+
+
+def test_an_epoch_runs_rows_carry_the_coefficient_of_a_learned_one_only(tmp_path) -> None:
+    """The paper's epochs (no set budget): each row holds the last update's alpha and entropy fraction."""
+    import envs  # noqa: F401  (registers the IDs)
+    from twodrl_bench import RunSpec, run_pair
+
+    hp = {"n_envs": 4, "gamma": 0.9, "n_steps": 5}
+    common = dict(epochs=2, learn_episodes=4, test_episodes=2, out_dir=str(tmp_path), gym_packages=["envs"])
+    auto = {**hp, "ent_coef": "auto", "target_entropy_fraction": 0.5, "ent_coef_lr": 0.01}
+    rows = run_pair(RunSpec("NomadOffice-v0", "a2c_auto", 3, hyperparams=auto, tensorboard=False, **common))
+    assert [row["ent_coef"] < 1.0 for row in rows] == [True, True]  # a fresh actor is above half the maximum
+    assert rows[1]["ent_coef"] < rows[0]["ent_coef"] and all(0.5 < row["entropy_fraction"] <= 1 for row in rows)
+    stock = run_pair(RunSpec("NomadOffice-v0", "a2c", 3, hyperparams=hp, tensorboard=False, **common))
+    assert "ent_coef" not in stock[0] and "entropy_fraction" not in stock[0]

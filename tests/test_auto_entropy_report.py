@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import json
+from importlib import resources
 
 import pytest
+import yaml
 
 from twodrl_bench.reports.auto_entropy import report, verdict
 
@@ -86,3 +88,48 @@ def test_the_course_table_reads_the_automatic_arms_courses(tmp_path) -> None:
     text = report(rows, spec, tmp_path)
     assert "| auto98 | 2.000 [-10.706, 14.706] (n=2) | 0.500 (n=2) | 10.000 [-53.531, 73.531] (n=2)" in text
     assert text.count("| automatic arm |") == 1 and "| zero | 0.000 (n=1)" not in text.split("automatic arm")[1]
+
+
+def test_learned_counts_enter_the_claim_and_make_a_task_informative() -> None:
+    """Return and events within the margins, but the claim learns on 3 seeds against 10: it fails; zero
+    learning on 2 against 10 (Wilson intervals apart) makes the office informative on its own."""
+    rules = {**RULES, "learned": {"metric": "goal_rate", "at_least": 0.8}}
+    vals = values(twod0=(-30, 0.05), auto98=(-30, 0.05), auto50=(-40, 0.05), zero=(-30, 0.05))
+    for arm, k in (("twod0", 3), ("auto98", 10), ("auto50", 10), ("zero", 2)):
+        vals[arm]["learned"] = [1.0] * k + [0.0] * (10 - k)
+    assert verdict(vals, rules) == "reference auto98; the claim fails"
+    vals["twod0"]["learned"] = [1.0] * 8 + [0.0] * 2  # 8/10 against 10/10: the intervals overlap
+    assert verdict(vals, rules) == "reference auto98; the claim holds"
+
+
+def _office_rows(arm: str, rps: float, learned: int, move: float = 0.0) -> list[dict[str, object]]:
+    """200 epochs of 10 seeds as the epoch job writes them (CSV text): reward per step ``rps`` (``rps + move``
+    over epochs 181-200), the last epoch's goal rate 1 on ``learned`` seeds and 0.3 on the others."""
+    rows = []
+    for seed in range(400, 410):
+        for epoch in range(1, 201):
+            value = rps + 0.001 * (seed % 3) + (move if epoch > 180 else 0.0)
+            goal = 1.0 if seed - 400 < learned or epoch < 200 else 0.3
+            row = {"arm": arm, "seed": str(seed), "epoch": str(epoch), "goal_rate": str(goal)}
+            row |= {"reward_per_step": str(value), "collision_rate": "0.0", "shortcut_share": "1.0"}
+            row |= {"detour_share": "0.0", "env_steps": str(1000 * epoch)}
+            if "auto" in arm:
+                row |= {"ent_coef": str(epoch / 256), "entropy_fraction": "0.5"}  # exact in binary
+            rows.append(row)
+    return rows
+
+
+def test_the_office_is_read_per_run_with_its_learned_rule_extension_and_course(tmp_path) -> None:
+    spec = yaml.safe_load(
+        resources.files("twodrl_bench").joinpath("specs", "auto_entropy", "NomadOffice-v0.yml").read_text()
+    )
+    rows = _office_rows("a2c_ent0", 0.10, 2) + _office_rows("a2c_ent0.05", 0.28, 10)
+    rows += _office_rows("a2c_auto0.98", 0.20, 10) + _office_rows("a2c_auto0.5", 0.28, 10)
+    rows += _office_rows("twoda2c_ent0", 0.27, 10, move=0.01) + _office_rows("twoda2c_auto0.98", 0.28, 10)
+    rows += _office_rows("twoda2c_auto0.5", 0.28, 10)
+    text = report(rows, spec, tmp_path)
+    assert "| a2c_ent0 | 0.1010 [0.1004, 0.1016] (n=10) | 0.000 (n=10) | 2/10 [0.06, 0.51] |" in text
+    assert "Verdict: reference a2c_auto0.5; the claim holds." in text
+    assert "fires for (twoda2c_ent0, a2c_auto0.5); the rule is read on their 1000-epoch rows" in text
+    # the course at epochs 20, 100 and 200: alpha 20/256, 100/256, 200/256 on every seed
+    assert "| a2c_auto0.5 | 0.078 (n=10) | 0.500 (n=10) | 0.391 (n=10) | 0.500 (n=10) | 0.781 (n=10) |" in text

@@ -34,7 +34,9 @@ Each ``train`` logs ``train/ent_coef`` (mean of the coefficients used), ``train/
 ``train/entropy`` (mean entropy of the batches that drove alpha) beside the algorithm's own keys, and keeps
 the coefficient's course through ``learn``'s budget in ``ent_coef_course`` (saved with the model): per tenth
 ``d`` of the budget, ``[num_timesteps, alpha, entropy / maximum entropy]`` of the last ``train`` in it, the
-means over its batches (None for a tenth with no ``train``), so a run's course is read from its final model.
+means over its batches (None for a tenth with no ``train``), so a run's course is read from its final model;
+``ent_coef_latest`` holds the last ``train``'s (for a run whose ``learn`` has no set budget, such as the
+paper's epochs, which read it per epoch).
 """
 
 from __future__ import annotations
@@ -129,6 +131,7 @@ class AutoEntropyMixin:
         self.log_ent_coef_ratio: th.Tensor | None = None
         self.ent_coef_optimizer: th.optim.Adam | None = None
         self._ent_coef_stats: list[tuple[float, float, float]] = []
+        self.ent_coef_latest: list[float] | None = None
         self.ent_coef_course: list[list[float] | None] = [None] * COURSE_POINTS
         return self.ent_coef_init
 
@@ -177,10 +180,11 @@ class AutoEntropyMixin:
         self.logger.record("train/ent_coef", float(np.mean(coefficients)))
         self.logger.record("train/ent_coef_loss", float(np.mean(losses)))
         self.logger.record("train/entropy", float(np.mean(entropies)))
+        entropy_fraction = float(np.mean(entropies)) / max_entropy(self.action_space)
+        self.ent_coef_latest = [int(self.num_timesteps), float(np.mean(coefficients)), entropy_fraction]
         done = 1.0 - self._current_progress_remaining  # of learn's budget, as the schedules read it
         point = min(COURSE_POINTS, max(1, math.ceil(COURSE_POINTS * done - 1e-9)))
-        entropy_fraction = float(np.mean(entropies)) / max_entropy(self.action_space)
-        self.ent_coef_course[point - 1] = [int(self.num_timesteps), float(np.mean(coefficients)), entropy_fraction]
+        self.ent_coef_course[point - 1] = self.ent_coef_latest
 
     def _get_torch_save_params(self) -> tuple[list[str], list[str]]:
         state_dicts, variables = super()._get_torch_save_params()  # type: ignore[misc]

@@ -123,6 +123,7 @@ class EpochCallback(BaseCallback):
                 "learn_episodes": s["epoch"] * spec.learn_episodes,
                 **{key: metrics.get(key, math.nan) for key in METRICS},
                 **self._learning_metrics(),
+                **coefficient_columns(self.model),
                 "env_steps": int(self.num_timesteps),
                 "wall_s": round(self.elapsed(), 3),
             }
@@ -134,6 +135,15 @@ class EpochCallback(BaseCallback):
             with progress_path(spec.out_dir, spec.name).open("a") as f:
                 f.write(f"{s['epoch']}\n")
         return s["epoch"] < spec.epochs
+
+
+def coefficient_columns(model: BaseAlgorithm) -> dict[str, float]:
+    """For a learned entropy coefficient (:mod:`twodrl_bench.auto_entropy`): ``ent_coef`` and
+    ``entropy_fraction`` of the last update; none for a fixed coefficient."""
+    if not getattr(model, "ent_coef_auto", False):
+        return {}
+    latest = model.ent_coef_latest or [math.nan] * 3
+    return {"ent_coef": latest[1], "entropy_fraction": latest[2]}
 
 
 def _new_model(spec: RunSpec) -> BaseAlgorithm:

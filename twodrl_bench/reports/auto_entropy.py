@@ -1,6 +1,7 @@
-"""Report of the self-tuning entropy study (``auto_entropy/<task>`` timesteps specs;
-``results/auto_entropy/preregistration.md``): per task, each arm over seeds, the registered verdict of "the
-interest is a tuning-free exploration setting on task X" and the descriptive comparisons.
+"""Report of the self-tuning entropy study (``auto_entropy/<task>`` specs; ``results/auto_entropy/preregistration.md``):
+per task, each arm over seeds, the registered verdict of "the interest is a tuning-free exploration setting on
+task X" and the descriptive comparisons. A timesteps task's rows are one per run; a task at the paper's epochs
+(the office) is first read per run (:func:`epoch_runs`).
 
 Each spec's ``rules`` hold what the verdict reads: ``claim`` (the 2D-RL arm at ``ent_coef`` 0), ``against`` (the
 automatic stock arms; the *reference* is the one with the higher mean return, the first on a tie), ``zero`` (the
@@ -8,7 +9,11 @@ stock arm at 0), ``fixed`` (the stock arm at its best fixed coefficient), ``pair
 descriptive differences), ``return``/``return_margin``, ``events``/``events_margin`` (row fields and margins) and
 ``min_seeds``. The claim holds if the Welch interval of (claim - reference) has its lower bound above
 ``-return_margin`` on the return and its upper bound below ``events_margin`` on the events; it is informative only
-if zero is worse than the reference (return interval wholly below 0, or events wholly above 0). Where the rows
+if zero is worse than the reference (return interval wholly below 0, or events wholly above 0). With ``learned``
+(``{metric, at_least}``: a run learned if its last epoch's ``metric`` reaches ``at_least``) the claim also needs
+as many learned seeds as the reference or overlapping Wilson intervals, and zero learning on fewer seeds with
+non-overlapping ones makes the task informative; with ``extend`` the report says for which pairs the registered
+extension fires (:func:`extension`). Where the rows
 carry it, the automatic arms' coefficient course follows (:func:`course_table`). Requires the ``plots`` extra
 (scipy).
 """
@@ -21,13 +26,15 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from twodrl_bench.intervals import welch_ci
+from twodrl_bench.intervals import welch_ci, wilson
 from twodrl_bench.reports.benchmark import _cell, _diff, task_of, typed
 
 Row = dict[str, Any]
 Spec = dict[str, Any]
 COURSE_AT = (10, 50, 100)
 """Percent of training at which the coefficient's course is reported (the pre-registration's points)."""
+FINAL_SHARE = 0.1
+"""An epoch run's final metrics average its last 10% of epochs (as the factorial's, ``docs/factorial.md``)."""
 RULE_KEYS = ("claim", "against", "zero", "fixed", "pairs", "return", "return_margin", "events", "events_margin")
 
 
@@ -42,22 +49,94 @@ def verdict(values: dict[str, dict[str, list[float]]], rules: dict[str, Any]) ->
     short = [arm for arm in arms if len(values.get(arm, {}).get("return", [])) < rules.get("min_seeds", 10)]
     if short:
         return f"no verdict: fewer than {rules.get('min_seeds', 10)} seeds for {', '.join(short)}"
-    reference = max(rules["against"], key=lambda arm: sum(values[arm]["return"]) / len(values[arm]["return"]))
+    reference = reference_of(values, rules)
     claim, zero, ref = values[rules["claim"]], values[rules["zero"]], values[reference]
     ret_lo, _ = _interval(claim["return"], ref["return"])
     _, ev_hi = _interval(claim["events"], ref["events"])
     zero_ret_hi = _interval(zero["return"], ref["return"])[1]
     zero_ev_lo = _interval(zero["events"], ref["events"])[0]
     holds = ret_lo > -rules["return_margin"] and ev_hi < rules["events_margin"]
+    zero_learns_fewer = False
+    if rules.get("learned"):
+        holds = holds and not _fewer_learned(claim["learned"], ref["learned"])
+        zero_learns_fewer = _fewer_learned(zero["learned"], ref["learned"])
     outcome = "holds" if holds else "fails"
     if holds and ret_lo > 0:
         outcome += "; the interest beats the automatic coefficient"
-    if not (zero_ret_hi < 0 or zero_ev_lo > 0):  # the bonus does not matter to the stock algorithm here
+    if not (zero_ret_hi < 0 or zero_ev_lo > 0 or zero_learns_fewer):  # the bonus does not matter to the stock one
         return (
             f"reference {reference}; untested: the stock algorithm does as well without a bonus as with the "
             f"automatic one (the claim's conditions: it {outcome})"
         )
     return f"reference {reference}; the claim {outcome}"
+
+
+def _fewer_learned(a: Sequence[float], b: Sequence[float]) -> bool:
+    """``a`` learned on fewer seeds than ``b`` and their Wilson intervals do not overlap."""
+    (a_lo, a_hi), (b_lo, b_hi) = wilson(int(sum(a)), len(a)), wilson(int(sum(b)), len(b))
+    return sum(a) < sum(b) and (a_hi < b_lo or b_hi < a_lo)
+
+
+def reference_of(values: dict[str, dict[str, list[float]]], rules: dict[str, Any]) -> str:
+    """The arm of ``against`` with the higher mean return (the first on a tie)."""
+    return max(rules["against"], key=lambda arm: sum(values[arm]["return"]) / len(values[arm]["return"]))
+
+
+def extension(values: dict[str, dict[str, list[float]]], rules: dict[str, Any]) -> str:
+    """The registered extension's sentence: the pairs of ``extend.pairs`` (``claim``, ``zero``, ``reference``
+    or arm names) whose return Welch interval holds 0 while either arm still moves (the mean over seeds of the
+    change between ``extend.windows``' two windows exceeds ``move_margin`` in absolute value)."""
+    ext = rules["extend"]
+    names = {"claim": rules["claim"], "zero": rules["zero"], "reference": reference_of(values, rules)}
+    fires = []
+    for pair in ext["pairs"]:
+        a, b = (names.get(arm, arm) for arm in pair)
+        lo, hi = _interval(values[a]["return"], values[b]["return"])
+        moves = [abs(sum(values[arm]["move"]) / len(values[arm]["move"])) > ext["move_margin"] for arm in (a, b)]
+        if lo <= 0 <= hi and any(moves):
+            fires.append(f"({a}, {b})")
+    epochs = ext["epochs"]
+    if not fires:
+        return f"Extension to {epochs} epochs: fires for no pair; the verdict above is final."
+    return f"Extension to {epochs} epochs: fires for {', '.join(fires)}; the rule is read on their {epochs}-epoch rows."
+
+
+def epoch_runs(rows: Sequence[Row], rules: dict[str, Any]) -> list[Row]:
+    """The paper's epoch rows (one per epoch) read per (arm, seed): ``reward_per_step``, ``collision_rate``,
+    ``shortcut_share`` and ``detour_share`` averaged over the last :data:`FINAL_SHARE` of epochs (NaN left out),
+    ``learned`` (1.0 or 0.0, ``rules["learned"]``), ``epochs_to_half`` (the first epoch at a goal rate >= 0.5),
+    ``move`` (``rules["extend"]``'s late window minus its early one, on reward per step) and, for a learned
+    coefficient, ``ent_coef_course`` (``ent_coef`` and ``entropy_fraction`` at each tenth of the epochs)."""
+    runs: dict[tuple[str, int], list[Row]] = {}
+    for row in rows:
+        runs.setdefault((row["arm"], int(row["seed"])), []).append(row)
+    out = []
+    for (arm, seed), epochs in sorted(runs.items()):
+        epochs.sort(key=lambda r: int(r["epoch"]))
+        final = epochs[-max(1, round(FINAL_SHARE * len(epochs))) :]
+        run: Row = {"arm": arm, "seed": seed, "epochs": len(epochs)}
+        for key in ("reward_per_step", "collision_rate", "shortcut_share", "detour_share"):
+            run[key] = _mean(float(r[key]) for r in final)
+        learned = rules["learned"]
+        run["learned"] = float(float(epochs[-1][learned["metric"]]) >= learned["at_least"])
+        half = [int(r["epoch"]) for r in epochs if float(r["goal_rate"]) >= 0.5]
+        run["epochs_to_half"] = float(half[0]) if half else math.nan
+        if "extend" in rules:
+            (a0, a1), (b0, b1) = rules["extend"]["windows"]
+            window = {int(r["epoch"]): float(r["reward_per_step"]) for r in epochs}
+            late = _mean(window.get(e, math.nan) for e in range(b0, b1 + 1))
+            run["move"] = late - _mean(window.get(e, math.nan) for e in range(a0, a1 + 1))
+        if str(epochs[0].get("ent_coef", "")) not in ("", "nan"):
+            points = [epochs[round(d * len(epochs) / 10) - 1] for d in range(1, 11)]
+            course = [[int(r["env_steps"]), float(r["ent_coef"]), float(r["entropy_fraction"])] for r in points]
+            run["ent_coef_course"] = json.dumps(course)
+        out.append(run)
+    return out
+
+
+def _mean(values: Any) -> float:
+    finite = [v for v in values if math.isfinite(v)]
+    return sum(finite) / len(finite) if finite else math.nan
 
 
 def task_report(spec: Spec, rows: Sequence[Row]) -> str:
@@ -66,28 +145,43 @@ def task_report(spec: Spec, rows: Sequence[Row]) -> str:
     missing = [key for key in RULE_KEYS if key not in rules]
     if missing:
         raise ValueError(f"rules of {spec['name']} lack {missing}")
+    if "epochs" in spec["protocol"]:
+        rows = epoch_runs(rows, rules)
     values: dict[str, dict[str, list[float]]] = {}
     for row in sorted(rows, key=lambda r: (r["arm"], r["seed"])):
-        arm = values.setdefault(row["arm"], {"return": [], "events": []})
+        arm = values.setdefault(row["arm"], {"return": [], "events": [], "learned": [], "move": []})
         arm["return"].append(float(row[rules["return"]]))
         arm["events"].append(float(row[rules["events"]]))
+        for key in ("learned", "move"):
+            if key in row:
+                arm[key].append(float(row[key]))
+    digits = 4 if "epochs" in spec["protocol"] else 2
+    learned = "learned" in rules
     lines = [
         f"### {task_of(spec)}",
         "",
-        f"| arm | {rules['return']} | {rules['events']} |",
-        "|---|---|---|",
+        f"| arm | {rules['return']} | {rules['events']} |" + (" learned |" if learned else ""),
+        "|---|---|---|" + ("---|" if learned else ""),
     ]
     for arm in spec["arms"]:
         if arm in values:
-            lines.append(f"| {arm} | {_cell(values[arm]['return'], 2)} | {_cell(values[arm]['events'], 3)} |")
-    lines += ["", f"Verdict: {verdict(values, rules)}.", "", "| difference | return | events |", "|---|---|---|"]
+            cells = [_cell(values[arm]["return"], digits), _cell(values[arm]["events"], 3)]
+            if learned:
+                k, n = int(sum(values[arm]["learned"])), len(values[arm]["learned"])
+                lo, hi = wilson(k, n)
+                cells.append(f"{k}/{n} [{lo:.2f}, {hi:.2f}]")
+            lines.append(f"| {arm} | {' | '.join(cells)} |")
+    lines += ["", f"Verdict: {verdict(values, rules)}."]
+    if "extend" in rules and not verdict(values, rules).startswith("no verdict"):
+        lines += ["", extension(values, rules)]
+    lines += ["", "| difference | return | events |", "|---|---|---|"]
     comparisons = [(rules["claim"], arm) for arm in rules["against"]] + [
         (arm, rules["fixed"]) for arm in rules["against"] if arm != rules["fixed"]
     ]
     comparisons += [(a, b) for a, b in rules["pairs"].items()]
     for a, b in comparisons:
         if a in values and b in values:
-            ret = _diff(values[a]["return"], values[b]["return"], 2)
+            ret = _diff(values[a]["return"], values[b]["return"], digits)
             ev = _diff(values[a]["events"], values[b]["events"], 3)
             lines.append(f"| {a} - {b} | {ret} | {ev} |")
     return "\n".join(lines + course_table(rows))
