@@ -103,7 +103,7 @@ def test_learned_counts_enter_the_claim_and_make_a_task_informative() -> None:
 
 
 def _office_rows(arm: str, rps: float, learned: int, move: float = 0.0) -> list[dict[str, object]]:
-    """200 epochs of 10 seeds as the epoch job writes them (CSV text): reward per step ``rps`` (``rps + move``
+    """200 epochs of 10 seeds as ``rows.csv`` holds them (text): reward per step ``rps`` (``rps + move``
     over epochs 181-200), the last epoch's goal rate 1 on ``learned`` seeds and 0.3 on the others."""
     rows = []
     for seed in range(400, 410):
@@ -115,6 +115,8 @@ def _office_rows(arm: str, rps: float, learned: int, move: float = 0.0) -> list[
             row |= {"detour_share": "0.0", "env_steps": str(1000 * epoch)}
             if "auto" in arm:
                 row |= {"ent_coef": str(epoch / 256), "entropy_fraction": "0.5"}  # exact in binary
+            else:  # rows.csv's empty cells: the columns only the automatic arms' rows have
+                row |= {"ent_coef": "", "entropy_fraction": ""}
             rows.append(row)
     return rows
 

@@ -116,22 +116,27 @@ def epoch_runs(rows: Sequence[Row], rules: dict[str, Any]) -> list[Row]:
         final = epochs[-max(1, round(FINAL_SHARE * len(epochs))) :]
         run: Row = {"arm": arm, "seed": seed, "epochs": len(epochs)}
         for key in ("reward_per_step", "collision_rate", "shortcut_share", "detour_share"):
-            run[key] = _mean(float(r[key]) for r in final)
+            run[key] = _mean(_float(r[key]) for r in final)
         learned = rules["learned"]
-        run["learned"] = float(float(epochs[-1][learned["metric"]]) >= learned["at_least"])
-        half = [int(r["epoch"]) for r in epochs if float(r["goal_rate"]) >= 0.5]
+        run["learned"] = float(_float(epochs[-1][learned["metric"]]) >= learned["at_least"])
+        half = [int(r["epoch"]) for r in epochs if _float(r["goal_rate"]) >= 0.5]
         run["epochs_to_half"] = float(half[0]) if half else math.nan
         if "extend" in rules:
             (a0, a1), (b0, b1) = rules["extend"]["windows"]
-            window = {int(r["epoch"]): float(r["reward_per_step"]) for r in epochs}
+            window = {int(r["epoch"]): _float(r["reward_per_step"]) for r in epochs}
             late = _mean(window.get(e, math.nan) for e in range(b0, b1 + 1))
             run["move"] = late - _mean(window.get(e, math.nan) for e in range(a0, a1 + 1))
-        if str(epochs[0].get("ent_coef", "")) not in ("", "nan"):
-            points = [epochs[round(d * len(epochs) / 10) - 1] for d in range(1, 11)]
-            course = [[int(r["env_steps"]), float(r["ent_coef"]), float(r["entropy_fraction"])] for r in points]
+        if any(math.isfinite(_float(r.get("ent_coef", ""))) for r in epochs):
+            points = [epochs[max(1, round(d * len(epochs) / 10)) - 1] for d in range(1, 11)]
+            course = [[int(r["env_steps"]), _float(r["ent_coef"]), _float(r["entropy_fraction"])] for r in points]
             run["ent_coef_course"] = json.dumps(course)
         out.append(run)
     return out
+
+
+def _float(value: Any) -> float:
+    """A CSV cell as a float; an empty cell (a column another run's rows have) is NaN."""
+    return math.nan if value in ("", None) else float(value)
 
 
 def _mean(values: Any) -> float:
