@@ -33,6 +33,12 @@ Row = dict[str, Any]
 Spec = dict[str, Any]
 COURSE_AT = (10, 50, 100)
 """Percent of training at which the coefficient's course is reported (the pre-registration's points)."""
+DESCRIPTIVE = ("final_length", "shortcut_share", "detour_share", "epochs_to_half")
+"""Registered descriptive columns, where the rows have them: the final evaluation's episode length (CliffWalking's
+path: 13, 15 or 17 steps, 100 if it never reaches the goal) and the office's final route shares and first epoch at
+a goal rate >= 0.5 (its mean over the seeds that reached it). See :func:`_descriptive`."""
+MAX_PATHS = 5
+"""A descriptive column with at most this many distinct values over a task's runs is shown as counts."""
 FINAL_SHARE = 0.1
 """An epoch run's final metrics average its last 10% of epochs (as the factorial's, ``docs/factorial.md``)."""
 RULE_KEYS = ("claim", "against", "zero", "fixed", "pairs", "return", "return_margin", "events", "events_margin")
@@ -144,6 +150,16 @@ def _mean(values: Any) -> float:
     return sum(finite) / len(finite) if finite else math.nan
 
 
+def _descriptive(values: dict[str, dict[str, list[float]]], arm: str, key: str) -> str:
+    """Mean over seeds with its interval; for a task whose runs all end on one of :data:`MAX_PATHS` values
+    (CliffWalking's deterministic paths), the count of seeds per value."""
+    everywhere = {v for arm_values in values.values() for v in arm_values.get(key, [])}
+    mine = [v for v in values[arm].get(key, []) if math.isfinite(v)]
+    if len(everywhere) > MAX_PATHS:
+        return _cell(mine, 2)
+    return ", ".join(f"{v:g}: {mine.count(v)}" for v in sorted(set(mine)))
+
+
 def task_report(spec: Spec, rows: Sequence[Row]) -> str:
     """Markdown for one task: arms over seeds, the verdict, the descriptive differences."""
     rules = spec["rules"]
@@ -157,17 +173,14 @@ def task_report(spec: Spec, rows: Sequence[Row]) -> str:
         arm = values.setdefault(row["arm"], {"return": [], "events": [], "learned": [], "move": []})
         arm["return"].append(float(row[rules["return"]]))
         arm["events"].append(float(row[rules["events"]]))
-        for key in ("learned", "move"):
+        for key in ("learned", "move", *DESCRIPTIVE):
             if key in row:
-                arm[key].append(float(row[key]))
+                arm.setdefault(key, []).append(float(row[key]))
     digits = 4 if "epochs" in spec["protocol"] else 2
     learned = "learned" in rules
-    lines = [
-        f"### {task_of(spec)}",
-        "",
-        f"| arm | {rules['return']} | {rules['events']} |" + (" learned |" if learned else ""),
-        "|---|---|---|" + ("---|" if learned else ""),
-    ]
+    shown = [key for key in DESCRIPTIVE if any(key in arm for arm in values.values())]
+    head = [rules["return"], rules["events"], *(["learned"] if learned else []), *shown]
+    lines = [f"### {task_of(spec)}", "", f"| arm | {' | '.join(head)} |", "|---|" + "---|" * len(head)]
     for arm in spec["arms"]:
         if arm in values:
             cells = [_cell(values[arm]["return"], digits), _cell(values[arm]["events"], 3)]
@@ -175,6 +188,7 @@ def task_report(spec: Spec, rows: Sequence[Row]) -> str:
                 k, n = int(sum(values[arm]["learned"])), len(values[arm]["learned"])
                 lo, hi = wilson(k, n)
                 cells.append(f"{k}/{n} [{lo:.2f}, {hi:.2f}]")
+            cells += [_descriptive(values, arm, key) for key in shown]
             lines.append(f"| {arm} | {' | '.join(cells)} |")
     lines += ["", f"Verdict: {verdict(values, rules)}."]
     if "extend" in rules and not verdict(values, rules).startswith("no verdict"):
@@ -189,6 +203,8 @@ def task_report(spec: Spec, rows: Sequence[Row]) -> str:
             ret = _diff(values[a]["return"], values[b]["return"], digits)
             ev = _diff(values[a]["events"], values[b]["events"], 3)
             lines.append(f"| {a} - {b} | {ret} | {ev} |")
+    if lines[-1] == "|---|---|---|":  # no pair with rows on both sides yet
+        lines = lines[:-3]
     return "\n".join(lines + course_table(rows))
 
 
