@@ -112,7 +112,7 @@ def _office_rows(arm: str, rps: float, learned: int, move: float = 0.0) -> list[
             goal = 1.0 if seed - 400 < learned or epoch < 200 else 0.3
             row = {"arm": arm, "seed": str(seed), "epoch": str(epoch), "goal_rate": str(goal)}
             row |= {"reward_per_step": str(value), "collision_rate": "0.0", "shortcut_share": "1.0"}
-            row |= {"detour_share": "0.0", "env_steps": str(1000 * epoch)}
+            row |= {"detour_share": "0.0", "env_steps": str(1000 * epoch), "interest_share": ""}
             if "auto" in arm:
                 row |= {"ent_coef": str(epoch / 256), "entropy_fraction": "0.5"}  # exact in binary
             else:  # rows.csv's empty cells: the columns only the automatic arms' rows have
@@ -135,3 +135,13 @@ def test_the_office_is_read_per_run_with_its_learned_rule_extension_and_course(t
     assert "fires for (twoda2c_ent0, a2c_auto0.5); the rule is read on their 1000-epoch rows" in text
     # the course at epochs 20, 100 and 200: alpha 20/256, 100/256, 200/256 on every seed
     assert "| a2c_auto0.5 | 0.078 (n=10) | 0.500 (n=10) | 0.391 (n=10) | 0.500 (n=10) | 0.781 (n=10) |" in text
+
+
+def test_an_epoch_task_with_another_learned_rule_is_refused(tmp_path) -> None:
+    """The office is read with the factorial's per-run metrics, whose learned rule is goal rate >= 0.8."""
+    spec = yaml.safe_load(
+        resources.files("twodrl_bench").joinpath("specs", "auto_entropy", "NomadOffice-v0.yml").read_text()
+    )
+    spec["rules"]["learned"] = {"metric": "goal_rate", "at_least": 0.5}
+    with pytest.raises(ValueError, match="rules\\['learned'\\]"):
+        report(_office_rows("a2c_ent0", 0.1, 2), spec, tmp_path)

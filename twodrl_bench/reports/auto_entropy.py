@@ -28,6 +28,7 @@ from typing import Any
 
 from twodrl_bench.intervals import welch_ci, wilson
 from twodrl_bench.reports.benchmark import _cell, _diff, task_of, typed
+from twodrl_bench.reports.factorial import run_metrics
 
 Row = dict[str, Any]
 Spec = dict[str, Any]
@@ -39,8 +40,8 @@ path: 13, 15 or 17 steps, 100 if it never reaches the goal) and the office's fin
 a goal rate >= 0.5 (its mean over the seeds that reached it). See :func:`_descriptive`."""
 MAX_PATHS = 5
 """A descriptive column with at most this many distinct values over a task's runs is shown as counts."""
-FINAL_SHARE = 0.1
-"""An epoch run's final metrics average its last 10% of epochs (as the factorial's, ``docs/factorial.md``)."""
+LEARNED = {"metric": "goal_rate", "at_least": 0.8}
+"""The learned rule an epoch task must register: the factorial's (:func:`.factorial.run_metrics`)."""
 RULE_KEYS = ("claim", "against", "zero", "fixed", "pairs", "return", "return_margin", "events", "events_margin")
 
 
@@ -108,46 +109,35 @@ def extension(values: dict[str, dict[str, list[float]]], rules: dict[str, Any]) 
 
 
 def epoch_runs(rows: Sequence[Row], rules: dict[str, Any]) -> list[Row]:
-    """The paper's epoch rows (one per epoch) read per (arm, seed): ``reward_per_step``, ``collision_rate``,
-    ``shortcut_share`` and ``detour_share`` averaged over the last :data:`FINAL_SHARE` of epochs (NaN left out),
-    ``learned`` (1.0 or 0.0, ``rules["learned"]``), ``epochs_to_half`` (the first epoch at a goal rate >= 0.5),
-    ``move`` (``rules["extend"]``'s late window minus its early one, on reward per step) and, for a learned
-    coefficient, ``ent_coef_course`` (``ent_coef`` and ``entropy_fraction`` at each tenth of the epochs)."""
-    runs: dict[tuple[str, int], list[Row]] = {}
-    for row in rows:
-        runs.setdefault((row["arm"], int(row["seed"])), []).append(row)
+    """The paper's epoch rows (one per epoch) read per (arm, seed) with the factorial's
+    :func:`~twodrl_bench.reports.factorial.run_metrics` (the last 10% of epochs; learned: the last epoch's goal
+    rate >= 0.8, which ``rules["learned"]`` must register), plus ``move`` (``rules["extend"]``'s late window minus
+    its early one, on reward per step) and, for a learned coefficient, ``ent_coef_course`` (``ent_coef`` and
+    ``entropy_fraction`` at each tenth of the epochs)."""
+    import pandas as pd
+
+    if rules["learned"] != LEARNED:
+        raise ValueError(f"rules['learned'] must be the factorial's {LEARNED}, got {rules['learned']}")
+    frame = pd.DataFrame(list(rows))
+    numbers = [column for column in frame.columns if column not in ("arm", "env", "algo", "task")]
+    frame[numbers] = frame[numbers].apply(pd.to_numeric, errors="coerce")
     out = []
-    for (arm, seed), epochs in sorted(runs.items()):
-        epochs.sort(key=lambda r: int(r["epoch"]))
-        final = epochs[-max(1, round(FINAL_SHARE * len(epochs))) :]
-        run: Row = {"arm": arm, "seed": seed, "epochs": len(epochs)}
-        for key in ("reward_per_step", "collision_rate", "shortcut_share", "detour_share"):
-            run[key] = _mean(_float(r[key]) for r in final)
-        learned = rules["learned"]
-        run["learned"] = float(_float(epochs[-1][learned["metric"]]) >= learned["at_least"])
-        half = [int(r["epoch"]) for r in epochs if _float(r["goal_rate"]) >= 0.5]
-        run["epochs_to_half"] = float(half[0]) if half else math.nan
+    for (arm, seed), epochs in frame.groupby(["arm", "seed"], sort=True):
+        epochs = epochs.sort_values("epoch").reset_index(drop=True)
+        metrics = run_metrics(epochs)
+        run: Row = {"arm": arm, "seed": int(seed), "epochs": len(epochs)}
+        run |= {key: metrics[key] for key in ("reward_per_step", "collision_rate", "learned", "epochs_to_half")}
+        run |= {"shortcut_share": metrics["final_shortcut_share"], "detour_share": metrics["final_detour_share"]}
         if "extend" in rules:
             (a0, a1), (b0, b1) = rules["extend"]["windows"]
-            window = {int(r["epoch"]): _float(r["reward_per_step"]) for r in epochs}
-            late = _mean(window.get(e, math.nan) for e in range(b0, b1 + 1))
-            run["move"] = late - _mean(window.get(e, math.nan) for e in range(a0, a1 + 1))
-        if any(math.isfinite(_float(r.get("ent_coef", ""))) for r in epochs):
-            points = [epochs[max(1, round(d * len(epochs) / 10)) - 1] for d in range(1, 11)]
-            course = [[int(r["env_steps"]), _float(r["ent_coef"]), _float(r["entropy_fraction"])] for r in points]
-            run["ent_coef_course"] = json.dumps(course)
+            late = epochs.loc[epochs["epoch"].between(b0, b1), "reward_per_step"].mean()
+            run["move"] = float(late - epochs.loc[epochs["epoch"].between(a0, a1), "reward_per_step"].mean())
+        if "ent_coef" in epochs and epochs["ent_coef"].notna().any():
+            points = epochs.iloc[[max(1, round(d * len(epochs) / 10)) - 1 for d in range(1, 11)]]
+            course = points[["env_steps", "ent_coef", "entropy_fraction"]].to_numpy(dtype=float).tolist()
+            run["ent_coef_course"] = json.dumps([[int(steps), alpha, share] for steps, alpha, share in course])
         out.append(run)
     return out
-
-
-def _float(value: Any) -> float:
-    """A CSV cell as a float; an empty cell (a column another run's rows have) is NaN."""
-    return math.nan if value in ("", None) else float(value)
-
-
-def _mean(values: Any) -> float:
-    finite = [v for v in values if math.isfinite(v)]
-    return sum(finite) / len(finite) if finite else math.nan
 
 
 def _descriptive(values: dict[str, dict[str, list[float]]], arm: str, key: str) -> str:
