@@ -31,28 +31,28 @@ from gymnasium import register
 
 MAX_EPISODE_STEPS = 300
 
-for suffix, kwargs in (("", {}), ("Open", {"map": "open"})):
-    register(
-        id=f"NomadOffice{suffix}-v0",
-        entry_point="envs.nomad.office:NomadOfficeEnv",
-        vector_entry_point="envs.nomad.batched:BatchedNomadOffice",
-        max_episode_steps=MAX_EPISODE_STEPS,
-        kwargs=dict(kwargs),
-    )
-    register(
-        id=f"NomadOfficeReal{suffix}-v0",
-        entry_point="envs.nomad.realistic:NomadOfficeRealEnv",
-        vector_entry_point="envs.nomad.realistic_batched:BatchedNomadOfficeReal",
-        max_episode_steps=MAX_EPISODE_STEPS,
-        kwargs=dict(kwargs),
-    )
-    register(
-        id=f"NomadOfficeMemorable{suffix}-v0",
-        entry_point="envs.memorable.env:NomadOfficeMemorableEnv",
-        vector_entry_point="envs.memorable.env:BatchedNomadOfficeMemorable",
-        max_episode_steps=MAX_EPISODE_STEPS,
-        kwargs=dict(kwargs),
-    )
+NOMAD_ENVS = {
+    "NomadOffice": ("envs.nomad.office:NomadOfficeEnv", "envs.nomad.batched:BatchedNomadOffice"),
+    "NomadOfficeReal": (
+        "envs.nomad.realistic:NomadOfficeRealEnv",
+        "envs.nomad.realistic_batched:BatchedNomadOfficeReal",
+    ),
+    "NomadOfficeMemorable": (
+        "envs.memorable.env:NomadOfficeMemorableEnv",
+        "envs.memorable.env:BatchedNomadOfficeMemorable",
+    ),
+}
+"""Name: (entry point, vector entry point) of each Nomad env; each is registered on the office and the open map."""
+
+for name, (entry_point, vector_entry_point) in NOMAD_ENVS.items():
+    for suffix, kwargs in (("", {}), ("Open", {"map": "open"})):
+        register(
+            id=f"{name}{suffix}-v0",
+            entry_point=entry_point,
+            vector_entry_point=vector_entry_point,
+            max_episode_steps=MAX_EPISODE_STEPS,
+            kwargs=dict(kwargs),
+        )
 
 for env_id, maker in (
     ("LunarLanderSplit-v3", "make_lunar_lander"),
