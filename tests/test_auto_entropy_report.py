@@ -110,7 +110,7 @@ def _office_rows(arm: str, rps: float, learned: int, move: float = 0.0) -> list[
         for epoch in range(1, 201):
             value = rps + 0.001 * (seed % 3) + (move if epoch > 180 else 0.0)
             goal = 1.0 if seed - 400 < learned or epoch < 200 else 0.3
-            row = {"arm": arm, "seed": str(seed), "epoch": str(epoch), "goal_rate": str(goal)}
+            row = {"arm": arm, "env": "NomadOffice-v0", "seed": str(seed), "epoch": str(epoch), "goal_rate": str(goal)}
             row |= {"reward_per_step": str(value), "collision_rate": "0.0", "shortcut_share": "1.0"}
             row |= {"detour_share": "0.0", "env_steps": str(1000 * epoch), "interest_share": ""}
             if "auto" in arm:
@@ -145,3 +145,20 @@ def test_an_epoch_task_with_another_learned_rule_is_refused(tmp_path) -> None:
     spec["rules"]["learned"] = {"metric": "goal_rate", "at_least": 0.5}
     with pytest.raises(ValueError, match="rules\\['learned'\\]"):
         report(_office_rows("a2c_ent0", 0.1, 2), spec, tmp_path)
+
+
+def test_a_study_with_the_office_and_a_public_task_reads_each_tasks_own_rows(tmp_path) -> None:
+    """The office's epoch rows carry their ``env`` and no ``task`` column; they are read for the office only."""
+    office = yaml.safe_load(
+        resources.files("twodrl_bench").joinpath("specs", "auto_entropy", "NomadOffice-v0.yml").read_text()
+    )
+    public = {"name": "auto_entropy/T", "env": "T-v0", "protocol": {"task": "T"}, "rules": RULES}
+    public["arms"] = {arm: {} for arm in ("zero", "auto98", "auto50", "twod0")}
+    rows = [
+        {"task": "T", "env": "T-v0", "arm": arm, "seed": seed, "final_return": -10.0, "train_events_per_episode": 0.1}
+        for arm in public["arms"]
+        for seed in range(10)
+    ]
+    text = report(rows + _office_rows("a2c_ent0", 0.10, 2), [public, office], tmp_path)
+    assert "| zero | -10.00 (n=10) |" in text
+    assert "| a2c_ent0 | 0.1010 [0.1004, 0.1016] (n=10) | 0.000 (n=10) | 2/10 [0.06, 0.51] |" in text

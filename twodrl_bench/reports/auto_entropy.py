@@ -229,7 +229,7 @@ def report(rows: Sequence[Row], spec: Spec | Sequence[Spec], out: str | Path) ->
     parts = []
     for one in specs:
         task = task_of(one)
-        mine = [row for row in rows if row.get("task", task) == task]
+        mine = [row for row in rows if row.get("task", row.get("env")) == task]  # epoch rows: no task, their env
         if mine:
             parts.append(task_report(one, mine))
     text = "\n\n".join(parts)
