@@ -42,9 +42,6 @@ MAX_PATHS = 5
 """A descriptive column with at most this many distinct values over a task's runs is shown as counts."""
 LEARNED = {"metric": "goal_rate", "at_least": 0.8}
 """The learned rule an epoch task must register: the factorial's (:func:`.factorial.run_metrics`)."""
-EPOCH_NUMBERS = ("seed", "epoch", "goal_rate", "reward_per_step", "shortcut_share", "detour_share")
-EPOCH_NUMBERS += ("collision_rate", "interest_share", "env_steps", "ent_coef", "entropy_fraction")
-"""The epoch rows' columns :func:`epoch_runs` reads as numbers (a row read back from CSV holds text)."""
 RULE_KEYS = ("claim", "against", "zero", "fixed", "pairs", "return", "return_margin", "events", "events_margin")
 
 
@@ -122,8 +119,8 @@ def epoch_runs(rows: Sequence[Row], rules: dict[str, Any]) -> list[Row]:
     if rules["learned"] != LEARNED:
         raise ValueError(f"rules['learned'] must be the factorial's {LEARNED}, got {rules['learned']}")
     frame = pd.DataFrame(list(rows))
-    numbers = [column for column in EPOCH_NUMBERS if column in frame.columns]
-    frame[numbers] = frame[numbers].apply(pd.to_numeric, errors="coerce")  # "" (no value) becomes NaN
+    numbers = [column for column in frame.columns if column not in ("arm", "env", "algo", "task")]
+    frame[numbers] = frame[numbers].apply(pd.to_numeric, errors="coerce")
     out = []
     for (arm, seed), epochs in frame.groupby(["arm", "seed"], sort=True):
         epochs = epochs.sort_values("epoch").reset_index(drop=True)
