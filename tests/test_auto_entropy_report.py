@@ -2,13 +2,18 @@
 
 from __future__ import annotations
 
+import csv
 import json
 from importlib import resources
+from pathlib import Path
 
 import pytest
 import yaml
 
+from twodrl_bench.reports import Part
 from twodrl_bench.reports.auto_entropy import report, verdict
+from twodrl_bench.runner import collect
+from twodrl_bench.spec import study_of
 
 RULES = {
     "claim": "twod0",
@@ -22,6 +27,24 @@ RULES = {
     "events_margin": 0.02,
     "min_seeds": 10,
 }
+
+
+def part(spec: dict, rows: list[dict], root: Path) -> Part:
+    """``spec``'s part with ``rows`` written and read back as the runner collects a run folder's rows."""
+    folder = root / spec["name"]
+    (folder / "rows").mkdir(parents=True)
+    with (folder / "rows" / "all.csv").open("w", newline="") as f:
+        columns = list(dict.fromkeys(key for row in rows for key in row))
+        writer = csv.DictWriter(f, columns)
+        writer.writeheader()
+        writer.writerows(rows)
+    return Part(spec["name"], study_of(spec["name"])[1], spec, collect(folder), folder)
+
+
+def office_spec(name: str = "NomadOffice-v0") -> dict:
+    """The packaged office spec ``auto_entropy/<name>``."""
+    text = resources.files("twodrl_bench").joinpath("specs", "auto_entropy", f"{name}.yml").read_text()
+    return yaml.safe_load(text)
 
 
 def values(**means: tuple[float, float]) -> dict[str, dict[str, list[float]]]:
@@ -70,11 +93,11 @@ def test_report_writes_the_table_and_refuses_missing_rules(tmp_path) -> None:
         for arm in spec["arms"]
         for seed in range(10)
     ]
-    text = report(rows, spec, tmp_path)
+    text = report([part(spec, rows, tmp_path / "runs")], tmp_path)
     assert (tmp_path / "table.md").read_text() == text + "\n"
     assert "| twod0 - auto98 | +0.00 [-2.84, +2.84] | +0.000 [+0.000, +0.000] |" in text
     with pytest.raises(ValueError, match="lack"):
-        report(rows, {**spec, "rules": {"claim": "twod0"}}, tmp_path)
+        report([part({**spec, "rules": {"claim": "twod0"}}, rows, tmp_path / "bad")], tmp_path)
 
 
 def test_the_course_table_reads_the_automatic_arms_courses(tmp_path) -> None:
@@ -85,7 +108,7 @@ def test_the_course_table_reads_the_automatic_arms_courses(tmp_path) -> None:
     for seed, alpha in ((0, 1.0), (1, 3.0)):
         course = [[100 * (i + 1), alpha * (i + 1), 0.5] for i in range(10)]
         rows.append({**rows[0], "arm": "auto98", "seed": seed, "ent_coef_course": json.dumps(course)})
-    text = report(rows, spec, tmp_path)
+    text = report([part(spec, rows, tmp_path / "runs")], tmp_path)
     assert "| auto98 | 2.000 [-10.706, 14.706] (n=2) | 0.500 (n=2) | 10.000 [-53.531, 73.531] (n=2)" in text
     assert text.count("| automatic arm |") == 1 and "| zero | 0.000 (n=1)" not in text.split("automatic arm")[1]
 
@@ -122,14 +145,12 @@ def _office_rows(arm: str, rps: float, learned: int, move: float = 0.0) -> list[
 
 
 def test_the_office_is_read_per_run_with_its_learned_rule_extension_and_course(tmp_path) -> None:
-    spec = yaml.safe_load(
-        resources.files("twodrl_bench").joinpath("specs", "auto_entropy", "NomadOffice-v0.yml").read_text()
-    )
+    spec = office_spec()
     rows = _office_rows("a2c_ent0", 0.10, 2) + _office_rows("a2c_ent0.05", 0.28, 10)
     rows += _office_rows("a2c_auto0.98", 0.20, 10) + _office_rows("a2c_auto0.5", 0.28, 10)
     rows += _office_rows("twoda2c_ent0", 0.27, 10, move=0.01) + _office_rows("twoda2c_auto0.98", 0.28, 10)
     rows += _office_rows("twoda2c_auto0.5", 0.28, 10)
-    text = report(rows, spec, tmp_path)
+    text = report([part(spec, rows, tmp_path / "runs")], tmp_path)
     assert "| a2c_ent0 | 0.1010 [0.1004, 0.1016] (n=10) | 0.000 (n=10) | 2/10 [0.06, 0.51] |" in text
     assert "Verdict: reference a2c_auto0.5; the claim holds." in text
     assert "fires for (twoda2c_ent0, a2c_auto0.5); the rule is read on their 1000-epoch rows" in text
@@ -139,19 +160,15 @@ def test_the_office_is_read_per_run_with_its_learned_rule_extension_and_course(t
 
 def test_an_epoch_task_with_another_learned_rule_is_refused(tmp_path) -> None:
     """The office is read with the factorial's per-run metrics, whose learned rule is goal rate >= 0.8."""
-    spec = yaml.safe_load(
-        resources.files("twodrl_bench").joinpath("specs", "auto_entropy", "NomadOffice-v0.yml").read_text()
-    )
+    spec = office_spec()
     spec["rules"]["learned"] = {"metric": "goal_rate", "at_least": 0.5}
     with pytest.raises(ValueError, match="rules\\['learned'\\]"):
-        report(_office_rows("a2c_ent0", 0.1, 2), spec, tmp_path)
+        report([part(spec, _office_rows("a2c_ent0", 0.1, 2), tmp_path / "runs")], tmp_path)
 
 
-def test_a_study_with_the_office_and_a_public_task_reads_each_tasks_own_rows(tmp_path) -> None:
-    """The office's epoch rows carry their ``env`` and no ``task`` column; they are read for the office only."""
-    office = yaml.safe_load(
-        resources.files("twodrl_bench").joinpath("specs", "auto_entropy", "NomadOffice-v0.yml").read_text()
-    )
+def test_each_part_is_read_from_its_own_rows(tmp_path) -> None:
+    """A public task beside the office, and the office at 200 epochs beside a part with the same env and arm names
+    (the registered extension): each part's table holds its own rows only."""
     public = {"name": "auto_entropy/T", "env": "T-v0", "protocol": {"task": "T"}, "rules": RULES}
     public["arms"] = {arm: {} for arm in ("zero", "auto98", "auto50", "twod0")}
     rows = [
@@ -159,6 +176,24 @@ def test_a_study_with_the_office_and_a_public_task_reads_each_tasks_own_rows(tmp
         for arm in public["arms"]
         for seed in range(10)
     ]
-    text = report(rows + _office_rows("a2c_ent0", 0.10, 2), [public, office], tmp_path)
-    assert "| zero | -10.00 (n=10) |" in text
-    assert "| a2c_ent0 | 0.1010 [0.1004, 0.1016] (n=10) | 0.000 (n=10) | 2/10 [0.06, 0.51] |" in text
+    office, longer = office_spec(), office_spec()
+    longer["name"] = "auto_entropy/NomadOffice-v0_long"
+    parts = [part(public, rows, tmp_path), part(office, _office_rows("a2c_ent0", 0.10, 2), tmp_path)]
+    parts.append(part(longer, _office_rows("a2c_ent0", 0.20, 10), tmp_path))
+    text = report(parts, tmp_path)
+    assert "### T\n" in text and "| zero | -10.00 (n=10) |" in text
+    ours, theirs = text.split("### NomadOffice-v0\n")[1].split("### NomadOffice-v0_long\n")
+    assert "| a2c_ent0 | 0.1010 [0.1004, 0.1016] (n=10) | 0.000 (n=10) | 2/10 [0.06, 0.51] |" in ours
+    assert "| a2c_ent0 | 0.2010 [0.2004, 0.2016] (n=10) | 0.000 (n=10) | 10/10 [0.72, 1.00] |" in theirs
+
+
+def test_a_part_with_only_the_extended_pair_is_read_on_the_claims_conditions(tmp_path) -> None:
+    """No ``zero`` and no ``fixed``: the claim against the one reference, informativeness left to the first part."""
+    spec = office_spec()
+    spec["arms"] = {arm: spec["arms"][arm] for arm in ("a2c_auto0.5", "twoda2c_ent0")}
+    spec["rules"] |= {"against": ["a2c_auto0.5"], "zero": None, "fixed": None, "pairs": {}}
+    del spec["rules"]["extend"]
+    rows = _office_rows("a2c_auto0.5", 0.28, 10) + _office_rows("twoda2c_ent0", 0.20, 4)
+    text = report([part(spec, rows, tmp_path)], tmp_path)
+    assert "Verdict: reference a2c_auto0.5; the claim fails (informative or not as read on the first part)." in text
+    assert "| twoda2c_ent0 - a2c_auto0.5 | -0.0800 [-0.0808, -0.0792] | +0.000 [+0.000, +0.000] |" in text

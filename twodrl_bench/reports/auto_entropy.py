@@ -14,7 +14,10 @@ if zero is worse than the reference (return interval wholly below 0, or events w
 as many learned seeds as the reference or overlapping Wilson intervals, and zero learning on fewer seeds with
 non-overlapping ones makes the task informative; with ``extend`` the report says for which pairs the registered
 extension fires (:func:`extension`). Where the rows
-carry it, the automatic arms' coefficient course follows (:func:`course_table`). Requires the ``plots`` extra
+carry it, the automatic arms' coefficient course follows (:func:`course_table`). Each part (spec) is read from its
+own rows, so two parts on one env with the same arm names (the office at 200 and at 1000 epochs) stay apart.
+``zero`` and ``fixed`` may be null and ``pairs`` empty: a part that runs only the pair an extension registered is
+read on the claim's conditions alone, its informativeness being its first part's. Requires the ``plots`` extra
 (scipy).
 """
 
@@ -27,11 +30,11 @@ from pathlib import Path
 from typing import Any
 
 from twodrl_bench.intervals import welch_ci, wilson
-from twodrl_bench.reports.benchmark import _cell, _diff, task_of, typed
+from twodrl_bench.reports import Part
+from twodrl_bench.reports.benchmark import _cell, _diff
 from twodrl_bench.reports.factorial import run_metrics
 
 Row = dict[str, Any]
-Spec = dict[str, Any]
 COURSE_AT = (10, 50, 100)
 """Percent of training at which the coefficient's course is reported (the pre-registration's points)."""
 DESCRIPTIVE = ("final_length", "shortcut_share", "detour_share", "epochs_to_half")
@@ -52,24 +55,26 @@ def _interval(a: Sequence[float], b: Sequence[float]) -> tuple[float, float]:
 
 def verdict(values: dict[str, dict[str, list[float]]], rules: dict[str, Any]) -> str:
     """The registered verdict on one task from ``values[arm][metric]`` (metric ``return`` or ``events``)."""
-    arms = [rules["claim"], rules["zero"], *rules["against"]]
+    arms = [rules["claim"], *([rules["zero"]] if rules["zero"] else []), *rules["against"]]
     short = [arm for arm in arms if len(values.get(arm, {}).get("return", [])) < rules.get("min_seeds", 10)]
     if short:
         return f"no verdict: fewer than {rules.get('min_seeds', 10)} seeds for {', '.join(short)}"
     reference = reference_of(values, rules)
-    claim, zero, ref = values[rules["claim"]], values[rules["zero"]], values[reference]
+    claim, ref = values[rules["claim"]], values[reference]
     ret_lo, _ = _interval(claim["return"], ref["return"])
     _, ev_hi = _interval(claim["events"], ref["events"])
-    zero_ret_hi = _interval(zero["return"], ref["return"])[1]
-    zero_ev_lo = _interval(zero["events"], ref["events"])[0]
     holds = ret_lo > -rules["return_margin"] and ev_hi < rules["events_margin"]
-    zero_learns_fewer = False
     if rules.get("learned"):
         holds = holds and not _fewer_learned(claim["learned"], ref["learned"])
-        zero_learns_fewer = _fewer_learned(zero["learned"], ref["learned"])
     outcome = "holds" if holds else "fails"
     if holds and ret_lo > 0:
         outcome += "; the interest beats the automatic coefficient"
+    if not rules["zero"]:
+        return f"reference {reference}; the claim {outcome} (informative or not as read on the first part)"
+    zero = values[rules["zero"]]
+    zero_ret_hi = _interval(zero["return"], ref["return"])[1]
+    zero_ev_lo = _interval(zero["events"], ref["events"])[0]
+    zero_learns_fewer = bool(rules.get("learned")) and _fewer_learned(zero["learned"], ref["learned"])
     if not (zero_ret_hi < 0 or zero_ev_lo > 0 or zero_learns_fewer):  # the bonus does not matter to the stock one
         return (
             f"reference {reference}; untested: the stock algorithm does as well without a bonus as with the "
@@ -108,19 +113,15 @@ def extension(values: dict[str, dict[str, list[float]]], rules: dict[str, Any]) 
     return f"Extension to {epochs} epochs: fires for {', '.join(fires)}; the rule is read on their {epochs}-epoch rows."
 
 
-def epoch_runs(rows: Sequence[Row], rules: dict[str, Any]) -> list[Row]:
-    """The paper's epoch rows (one per epoch) read per (arm, seed) with the factorial's
+def epoch_runs(frame: Any, rules: dict[str, Any]) -> list[Row]:
+    """The paper's epoch rows (``frame``, one per epoch, as :func:`~twodrl_bench.runner.collect` reads them) read
+    per (arm, seed) with the factorial's
     :func:`~twodrl_bench.reports.factorial.run_metrics` (the last 10% of epochs; learned: the last epoch's goal
     rate >= 0.8, which ``rules["learned"]`` must register), plus ``move`` (``rules["extend"]``'s late window minus
     its early one, on reward per step) and, for a learned coefficient, ``ent_coef_course`` (``ent_coef`` and
     ``entropy_fraction`` at each tenth of the epochs)."""
-    import pandas as pd
-
     if rules["learned"] != LEARNED:
         raise ValueError(f"rules['learned'] must be the factorial's {LEARNED}, got {rules['learned']}")
-    frame = pd.DataFrame(list(rows))
-    numbers = [column for column in frame.columns if column not in ("arm", "env", "algo", "task")]
-    frame[numbers] = frame[numbers].apply(pd.to_numeric, errors="coerce")
     out = []
     for (arm, seed), epochs in frame.groupby(["arm", "seed"], sort=True):
         epochs = epochs.sort_values("epoch").reset_index(drop=True)
@@ -150,14 +151,17 @@ def _descriptive(values: dict[str, dict[str, list[float]]], arm: str, key: str) 
     return ", ".join(f"{v:g}: {mine.count(v)}" for v in sorted(set(mine)))
 
 
-def task_report(spec: Spec, rows: Sequence[Row]) -> str:
-    """Markdown for one task: arms over seeds, the verdict, the descriptive differences."""
+def task_report(part: Part) -> str:
+    """Markdown for one part: arms over seeds, the verdict, the descriptive differences."""
+    spec = part.spec
     rules = spec["rules"]
     missing = [key for key in RULE_KEYS if key not in rules]
     if missing:
         raise ValueError(f"rules of {spec['name']} lack {missing}")
     if "epochs" in spec["protocol"]:
-        rows = epoch_runs(rows, rules)
+        rows = epoch_runs(part.rows, rules)
+    else:
+        rows = part.rows.to_dict("records")
     values: dict[str, dict[str, list[float]]] = {}
     for row in sorted(rows, key=lambda r: (r["arm"], r["seed"])):
         arm = values.setdefault(row["arm"], {"return": [], "events": [], "learned": [], "move": []})
@@ -170,7 +174,7 @@ def task_report(spec: Spec, rows: Sequence[Row]) -> str:
     learned = "learned" in rules
     shown = [key for key in DESCRIPTIVE if any(key in arm for arm in values.values())]
     head = [rules["return"], rules["events"], *(["learned"] if learned else []), *shown]
-    lines = [f"### {task_of(spec)}", "", f"| arm | {' | '.join(head)} |", "|---|" + "---|" * len(head)]
+    lines = [f"### {part.part or spec['name']}", "", f"| arm | {' | '.join(head)} |", "|---|" + "---|" * len(head)]
     for arm in spec["arms"]:
         if arm in values:
             cells = [_cell(values[arm]["return"], digits), _cell(values[arm]["events"], 3)]
@@ -185,7 +189,7 @@ def task_report(spec: Spec, rows: Sequence[Row]) -> str:
         lines += ["", extension(values, rules)]
     lines += ["", "| difference | return | events |", "|---|---|---|"]
     comparisons = [(rules["claim"], arm) for arm in rules["against"]] + [
-        (arm, rules["fixed"]) for arm in rules["against"] if arm != rules["fixed"]
+        (arm, rules["fixed"]) for arm in rules["against"] if rules["fixed"] and arm != rules["fixed"]
     ]
     comparisons += [(a, b) for a, b in rules["pairs"].items()]
     for a, b in comparisons:
@@ -219,18 +223,9 @@ def course_table(rows: Sequence[Row]) -> list[str]:
     return lines
 
 
-def report(rows: Sequence[Row], spec: Spec | Sequence[Spec], out: str | Path) -> str:
-    """One :func:`task_report` per spec with rows, written to ``<out>/table.md``; the text."""
-    specs = [spec] if isinstance(spec, dict) else list(spec)
-    rows = [typed(row) for row in rows]
-    parts = []
-    for one in specs:
-        task = task_of(one)
-        mine = [row for row in rows if row.get("task", row.get("env")) == task]  # epoch rows: no task, their env
-        if mine:
-            parts.append(task_report(one, mine))
-    text = "\n\n".join(parts)
-    out = Path(out)
+def report(parts: list[Part], out: Path) -> str:
+    """One :func:`task_report` per part with rows, written to ``<out>/table.md``; the text."""
+    text = "\n\n".join(task_report(part) for part in parts if len(part.rows))
     out.mkdir(parents=True, exist_ok=True)
     (out / "table.md").write_text(text + "\n")
     return text
