@@ -10,9 +10,9 @@ from pathlib import Path
 import pytest
 import yaml
 
+from twodrl_bench.folders import collect
 from twodrl_bench.reports import Part
 from twodrl_bench.reports.auto_entropy import report, verdict
-from twodrl_bench.runner import collect
 from twodrl_bench.spec import study_of
 
 RULES = {

@@ -8,9 +8,9 @@ import pandas as pd
 import pytest
 import yaml
 
+from twodrl_bench.folders import read_spec
 from twodrl_bench.protocol import COLUMNS
 from twodrl_bench.reports import factorial, find_parts
-from twodrl_bench.runner import read_spec
 
 
 def rows(seed: int, detour: list[float], shortcut_end: float = 1.0, reward: float = 0.28, algo: str = "a2c"):

@@ -13,7 +13,8 @@ import yaml
 from tests.toy_study import toy_settings, toy_spec, write_spec
 from twodrl_bench import cli
 from twodrl_bench.backends import run_jobs
-from twodrl_bench.runner import guard, rows_path, run_study
+from twodrl_bench.folders import rows_path
+from twodrl_bench.runner import guard, run_study
 from twodrl_bench.spec import diff, dump, load_spec, packaged_specs, resolve, validate
 
 pytest.importorskip("pandas")

@@ -47,7 +47,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 def status(root: Path) -> str:
     """One line per run folder under ``root`` (its spec.yml): jobs finished, running (epochs done) and pending."""
     from twodrl_bench.epochs import progress_path
-    from twodrl_bench.runner import read_spec, rows_path
+    from twodrl_bench.folders import read_spec, rows_path
 
     lines = []
     for path in sorted(root.rglob("spec.yml")):

@@ -5,29 +5,23 @@ the protocol: :func:`twodrl_bench.epochs.run_job` (the paper's epochs) or
 ``twodrl_bench.timesteps.run_job`` (a budget of timesteps and a final evaluation), both
 ``run_job(arm, env, env_kwargs, protocol, seed, out_dir, gym_packages) -> rows``.
 
-The run folder (default ``runs/<spec name>``) holds ``spec.yml`` (the resolved spec), ``machine.json``
-(:func:`record_machine`: the machines its jobs ran on), ``rows/<arm>_seed<seed>.csv``
-per finished job (written atomically: a job with a file is done), ``rows.csv`` (every job's rows),
-and what the jobs keep: ``checkpoints/`` (a job without rows resumes from its checkpoint), ``progress/``,
+The run folder (:mod:`twodrl_bench.folders`: ``spec.yml``, ``machine.json``, ``rows/``, ``rows.csv``) also
+holds what the jobs keep: ``checkpoints/`` (a job without rows resumes from its checkpoint), ``progress/``,
 ``models/`` and ``tb/``. Running a spec into a folder whose stored spec differs in what decides the rows
 (:func:`twodrl_bench.spec.guard_diff`) is refused; arms and seeds may be added.
 """
 
 from __future__ import annotations
 
-import csv
 import importlib
-import io
-import json
 import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from twodrl_bench.backends import run_jobs
 from twodrl_bench.checkpoint import atomic_write_bytes
+from twodrl_bench.folders import collect, read_spec, record_machine, rows_path, write_rows
 from twodrl_bench.spec import Spec, dump, guard_diff, load_spec, merge, resolve, validate
 
 Row = dict[str, Any]
@@ -37,26 +31,6 @@ def job_function(protocol: dict[str, Any]) -> Callable[..., list[Row]]:
     """The job function of ``protocol``: epochs or timesteps."""
     module = "twodrl_bench.epochs" if "epochs" in protocol else "twodrl_bench.timesteps"
     return importlib.import_module(module).run_job
-
-
-def rows_path(folder: str | Path, arm: str, seed: int) -> Path:
-    return Path(folder) / "rows" / f"{arm}_seed{seed}.csv"
-
-
-def write_rows(path: Path, rows: list[Row]) -> None:
-    """Write ``rows`` as CSV atomically (temporary file, then rename); the columns in first-seen order."""
-    columns = list(dict.fromkeys(key for row in rows for key in row))
-    buf = io.StringIO(newline="")
-    writer = csv.DictWriter(buf, fieldnames=columns)
-    writer.writeheader()
-    writer.writerows(rows)
-    atomic_write_bytes(path, buf.getvalue().encode())
-
-
-def read_spec(folder: str | Path) -> Spec | None:
-    """The resolved spec stored in ``folder`` (None if there is none)."""
-    path = Path(folder) / "spec.yml"
-    return yaml.safe_load(path.read_text()) if path.is_file() else None
 
 
 def guard(folder: str | Path, resolved: Spec) -> Spec:
@@ -98,35 +72,6 @@ def pending_jobs(resolved: Spec, folder: str | Path, arms: list[str] | None = No
                 }
             )
     return jobs
-
-
-def collect(folder: str | Path):
-    """Every rows file of ``folder`` as one DataFrame, sorted by arm, seed (and epoch), written to ``rows.csv``."""
-    import pandas as pd
-
-    files = sorted((Path(folder) / "rows").glob("*.csv"))
-    if not files:
-        return pd.DataFrame()
-    df = pd.concat([pd.read_csv(f) for f in files], ignore_index=True)
-    keys = [k for k in ("arm", "seed", "epoch") if k in df.columns]
-    df = df.sort_values(keys, kind="stable").reset_index(drop=True)
-    buf = io.StringIO()
-    df.to_csv(buf, index=False)
-    atomic_write_bytes(Path(folder) / "rows.csv", buf.getvalue().encode())
-    return df
-
-
-def record_machine(folder: str | Path, info: dict[str, Any]) -> list[dict[str, Any]]:
-    """Add ``info`` (:func:`~twodrl_bench.machine.machine_info` of a job's process) to ``machine.json``, the list
-    of the distinct machines whose jobs ran into ``folder``, in order of first use (their rows may differ bitwise)."""
-    path = Path(folder) / "machine.json"
-    machines = json.loads(path.read_text()) if path.is_file() else []
-    if info not in machines:
-        if machines:
-            print(f"{folder}: jobs ran on another machine than before (machine.json lists each)")
-        machines.append(info)
-        atomic_write_bytes(path, json.dumps(machines, indent=1).encode())
-    return machines
 
 
 def default_folder(name: str) -> Path:

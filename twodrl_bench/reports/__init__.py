@@ -21,6 +21,7 @@ from typing import Any
 
 import yaml
 
+from twodrl_bench.folders import collect, read_spec
 from twodrl_bench.spec import study_of
 
 
@@ -42,8 +43,6 @@ def find_parts(root: str | Path, study: str) -> list[Part]:
 
     :raises ValueError: if there is none
     """
-    from twodrl_bench.runner import collect, read_spec
-
     root = Path(root)
     folders = [root] if (root / "spec.yml").is_file() else sorted(p for p in root.glob("*") if p.is_dir())
     parts = []
@@ -67,8 +66,6 @@ def report_study(study: str, runs: str | Path = "runs", out: str | Path | None =
 
 def report_run(folder: str | Path) -> str:
     """Report the study of the run folder ``folder`` (with its sibling parts) into the study's run folder."""
-    from twodrl_bench.runner import read_spec
-
     folder = Path(folder)
     study, part = study_of(read_spec(folder)["name"])
     root = folder.parent if part else folder

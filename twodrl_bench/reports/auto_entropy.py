@@ -114,7 +114,7 @@ def extension(values: dict[str, dict[str, list[float]]], rules: dict[str, Any]) 
 
 
 def epoch_runs(frame: Any, rules: dict[str, Any]) -> list[Row]:
-    """The paper's epoch rows (``frame``, one per epoch, as :func:`~twodrl_bench.runner.collect` reads them) read
+    """The paper's epoch rows (``frame``, one per epoch, as :func:`~twodrl_bench.folders.collect` reads them) read
     per (arm, seed) with the factorial's
     :func:`~twodrl_bench.reports.factorial.run_metrics` (the last 10% of epochs; learned: the last epoch's goal
     rate >= 0.8, which ``rules["learned"]`` must register), plus ``move`` (``rules["extend"]``'s late window minus
