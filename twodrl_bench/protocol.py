@@ -144,3 +144,14 @@ def parse_env_kwargs(items: list[str] | None, name: str = "env_kwargs") -> dict[
 def trial_seed(seed: int, epoch: int) -> int:
     """Seed of epoch ``epoch``'s test trials: disjoint from the learning seeds (which are < 10**6)."""
     return 10**6 + 1_000 * (seed % 10**6) + epoch
+
+
+SETTINGS_SUFFIXES = ("_variant", "_auto")
+"""An algorithm named ``<algo><suffix>`` (an ablation variant, a self-tuning arm) reads ``<algo>``'s settings."""
+
+
+def settings_algo(algo: str) -> str:
+    """The algorithm whose settings file ``algo`` reads (:data:`SETTINGS_SUFFIXES`)."""
+    for suffix in SETTINGS_SUFFIXES:
+        algo = algo.removesuffix(suffix)
+    return algo

@@ -226,17 +226,6 @@ def _expand_grid(source: str, grid: Any) -> dict[str, dict[str, Any]]:
     return arms
 
 
-SETTINGS_SUFFIXES = ("_variant", "_auto")
-"""An algorithm named ``<algo><suffix>`` (an ablation variant, a self-tuning arm) reads ``<algo>``'s settings."""
-
-
-def settings_algo(algo: str) -> str:
-    """The algorithm whose settings file ``algo`` reads (:data:`SETTINGS_SUFFIXES`)."""
-    for suffix in SETTINGS_SUFFIXES:
-        algo = algo.removesuffix(suffix)
-    return algo
-
-
 def resolve(spec: Spec) -> Spec:
     """``spec`` with each arm's ``hyperparams`` and ``defaults`` (the constructor defaults in force, as ``repr``).
 
@@ -245,7 +234,7 @@ def resolve(spec: Spec) -> Spec:
 
     :raises ValueError: if a settings file or its entry for the env is missing, or (epochs) holds a schedule
     """
-    from twodrl_bench.protocol import check_constants, class_defaults, epoch_entry
+    from twodrl_bench.protocol import check_constants, class_defaults, epoch_entry, settings_algo
 
     out = copy.deepcopy(spec)
     epochs = "epochs" in spec["protocol"]

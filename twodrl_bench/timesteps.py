@@ -42,7 +42,7 @@ import numpy as np
 Row = dict[str, Any]
 STOCK = {"twoda2c": "a2c", "twodppo": "ppo"}
 """The stock algorithm of each 2D-RL algorithm: whose rl-zoo3 entry it reads (a ``<algo>_auto`` arm: its
-``<algo>``'s, :func:`twodrl_bench.spec.settings_algo`)."""
+``<algo>``'s, :func:`twodrl_bench.protocol.settings_algo`)."""
 EVAL_SEED = 10**6
 """Seed of the evaluation env, plus the training seed: apart from the training seeds."""
 CURVE_BINS = 20
@@ -72,7 +72,7 @@ def settings_file(arm: dict[str, Any]) -> Path:
     :raises ValueError: if the file does not exist
     """
     from sb3_twodrl.hyperparams import hyperparams_path
-    from twodrl_bench.spec import settings_algo
+    from twodrl_bench.protocol import settings_algo
 
     settings, algo = arm.get("settings", "packaged"), settings_algo(arm["algo"])
     if settings == "rl-zoo3":
