@@ -185,15 +185,3 @@ def test_each_part_is_read_from_its_own_rows(tmp_path) -> None:
     ours, theirs = text.split("### NomadOffice-v0\n")[1].split("### NomadOffice-v0_long\n")
     assert "| a2c_ent0 | 0.1010 [0.1004, 0.1016] (n=10) | 0.000 (n=10) | 2/10 [0.06, 0.51] |" in ours
     assert "| a2c_ent0 | 0.2010 [0.2004, 0.2016] (n=10) | 0.000 (n=10) | 10/10 [0.72, 1.00] |" in theirs
-
-
-def test_a_part_with_only_the_extended_pair_is_read_on_the_claims_conditions(tmp_path) -> None:
-    """No ``zero`` and no ``fixed``: the claim against the one reference, informativeness left to the first part."""
-    spec = office_spec()
-    spec["arms"] = {arm: spec["arms"][arm] for arm in ("a2c_auto0.5", "twoda2c_ent0")}
-    spec["rules"] |= {"against": ["a2c_auto0.5"], "zero": None, "fixed": None, "pairs": {}}
-    del spec["rules"]["extend"]
-    rows = _office_rows("a2c_auto0.5", 0.28, 10) + _office_rows("twoda2c_ent0", 0.20, 4)
-    text = report([part(spec, rows, tmp_path)], tmp_path)
-    assert "Verdict: reference a2c_auto0.5; the claim fails (informative or not as read on the first part)." in text
-    assert "| twoda2c_ent0 - a2c_auto0.5 | -0.0800 [-0.0808, -0.0792] | +0.000 [+0.000, +0.000] |" in text

@@ -15,10 +15,8 @@ as many learned seeds as the reference or overlapping Wilson intervals, and zero
 non-overlapping ones makes the task informative; with ``extend`` the report says for which pairs the registered
 extension fires (:func:`extension`). Where the rows
 carry it, the automatic arms' coefficient course follows (:func:`course_table`). Each part (spec) is read from its
-own rows, so two parts on one env with the same arm names (the office at 200 and at 1000 epochs) stay apart.
-``zero`` and ``fixed`` may be null and ``pairs`` empty: a part that runs only the pair an extension registered is
-read on the claim's conditions alone, its informativeness being its first part's. Requires the ``plots`` extra
-(scipy).
+own rows, so two parts on one env (the office's A2C and PPO specs, an extension) stay apart. Requires the
+``plots`` extra (scipy).
 """
 
 from __future__ import annotations
@@ -55,7 +53,7 @@ def _interval(a: Sequence[float], b: Sequence[float]) -> tuple[float, float]:
 
 def verdict(values: dict[str, dict[str, list[float]]], rules: dict[str, Any]) -> str:
     """The registered verdict on one task from ``values[arm][metric]`` (metric ``return`` or ``events``)."""
-    arms = [rules["claim"], *([rules["zero"]] if rules["zero"] else []), *rules["against"]]
+    arms = [rules["claim"], rules["zero"], *rules["against"]]
     short = [arm for arm in arms if len(values.get(arm, {}).get("return", [])) < rules.get("min_seeds", 10)]
     if short:
         return f"no verdict: fewer than {rules.get('min_seeds', 10)} seeds for {', '.join(short)}"
@@ -69,8 +67,6 @@ def verdict(values: dict[str, dict[str, list[float]]], rules: dict[str, Any]) ->
     outcome = "holds" if holds else "fails"
     if holds and ret_lo > 0:
         outcome += "; the interest beats the automatic coefficient"
-    if not rules["zero"]:
-        return f"reference {reference}; the claim {outcome} (informative or not as read on the first part)"
     zero = values[rules["zero"]]
     zero_ret_hi = _interval(zero["return"], ref["return"])[1]
     zero_ev_lo = _interval(zero["events"], ref["events"])[0]
@@ -189,7 +185,7 @@ def task_report(part: Part) -> str:
         lines += ["", extension(values, rules)]
     lines += ["", "| difference | return | events |", "|---|---|---|"]
     comparisons = [(rules["claim"], arm) for arm in rules["against"]] + [
-        (arm, rules["fixed"]) for arm in rules["against"] if rules["fixed"] and arm != rules["fixed"]
+        (arm, rules["fixed"]) for arm in rules["against"] if arm != rules["fixed"]
     ]
     comparisons += [(a, b) for a, b in rules["pairs"].items()]
     for a, b in comparisons:
