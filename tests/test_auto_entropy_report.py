@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import csv
 import json
 from importlib import resources
 from pathlib import Path
@@ -10,7 +9,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from twodrl_bench.folders import collect
+from twodrl_bench.folders import collect, write_rows
 from twodrl_bench.reports import Part
 from twodrl_bench.reports.auto_entropy import report, verdict
 from twodrl_bench.spec import study_of
@@ -32,12 +31,7 @@ RULES = {
 def part(spec: dict, rows: list[dict], root: Path) -> Part:
     """``spec``'s part with ``rows`` written and read back as the runner collects a run folder's rows."""
     folder = root / spec["name"]
-    (folder / "rows").mkdir(parents=True)
-    with (folder / "rows" / "all.csv").open("w", newline="") as f:
-        columns = list(dict.fromkeys(key for row in rows for key in row))
-        writer = csv.DictWriter(f, columns)
-        writer.writeheader()
-        writer.writerows(rows)
+    write_rows(folder / "rows" / "all.csv", rows)
     return Part(spec["name"], study_of(spec["name"])[1], spec, collect(folder), folder)
 
 
