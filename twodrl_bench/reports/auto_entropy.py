@@ -180,8 +180,9 @@ def task_report(part: Part) -> str:
                 cells.append(f"{k}/{n} [{lo:.2f}, {hi:.2f}]")
             cells += [_descriptive(values, arm, key) for key in shown]
             lines.append(f"| {arm} | {' | '.join(cells)} |")
-    lines += ["", f"Verdict: {verdict(values, rules)}."]
-    if "extend" in rules and not verdict(values, rules).startswith("no verdict"):
+    reading = verdict(values, rules)
+    lines += ["", f"Verdict: {reading}."]
+    if "extend" in rules and not reading.startswith("no verdict"):
         lines += ["", extension(values, rules)]
     lines += ["", "| difference | return | events |", "|---|---|---|"]
     comparisons = [(rules["claim"], arm) for arm in rules["against"]] + [
