@@ -3,7 +3,7 @@
 Importing this package registers:
 
 * ``NomadOffice-v0``: the office of paper section 3 with ideal sensors and exact 10 cm moves;
-* ``NomadOfficeReal-v0``: the same office on a stand-in for the physical robot (``envs.nomad.realistic``:
+* ``NomadOfficeReal-v0``: the same office on a stand-in for the physical robot (``twodrl_envs.nomad.realistic``:
   specular sonar, ringing, cross-talk, surface-dependent infrared, drifting odometry);
 * ``NomadOfficeMemorable-v0``: the same task replayed from a recorded sensor database (MEMORABLE);
 * ``NomadOfficeOpen-v0`` / ``NomadOfficeRealOpen-v0`` / ``NomadOfficeMemorableOpen-v0``: the three on the open
@@ -15,7 +15,7 @@ regions) or a map file (docs/own_office.md). Every ID has a ``vector_entry_point
 (``gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point", **options)``), which takes every
 option of ``gym.make(id, **options)``: sub-env ``i`` behaves exactly like ``gym.make(id, **options)`` (tested).
 
-and, for the benchmark (``envs.public``, docs/benchmark.md), public tasks whose punishment is
+and, for the benchmark (``twodrl_envs.public``, docs/benchmark.md), public tasks whose punishment is
 written into ``info["punishment"]`` (``reward_split="info"``):
 
 * ``LunarLanderSplit-v3``: LunarLander-v3, crash and fuel as punishment;
@@ -32,14 +32,14 @@ from gymnasium import register
 MAX_EPISODE_STEPS = 300
 
 NOMAD_ENVS = {
-    "NomadOffice": ("envs.nomad.office:NomadOfficeEnv", "envs.nomad.batched:BatchedNomadOffice"),
+    "NomadOffice": ("twodrl_envs.nomad.office:NomadOfficeEnv", "twodrl_envs.nomad.batched:BatchedNomadOffice"),
     "NomadOfficeReal": (
-        "envs.nomad.realistic:NomadOfficeRealEnv",
-        "envs.nomad.realistic_batched:BatchedNomadOfficeReal",
+        "twodrl_envs.nomad.realistic:NomadOfficeRealEnv",
+        "twodrl_envs.nomad.realistic_batched:BatchedNomadOfficeReal",
     ),
     "NomadOfficeMemorable": (
-        "envs.memorable.env:NomadOfficeMemorableEnv",
-        "envs.memorable.env:BatchedNomadOfficeMemorable",
+        "twodrl_envs.memorable.env:NomadOfficeMemorableEnv",
+        "twodrl_envs.memorable.env:BatchedNomadOfficeMemorable",
     ),
 }
 """Name: (entry point, vector entry point) of each Nomad env; each is registered on the office and the open map."""
@@ -59,4 +59,4 @@ for env_id, maker in (
     ("CliffWalkingSplit-v1", "make_cliff_walking"),
     ("LavaGapSplit-v0", "make_lava_gap"),
 ):
-    register(id=env_id, entry_point=f"envs.public:{maker}")
+    register(id=env_id, entry_point=f"twodrl_envs.public:{maker}")

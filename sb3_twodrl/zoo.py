@@ -138,12 +138,12 @@ def _option_value(argv: list[str], *names: str) -> str | None:
 
 
 def prepare_zoo_argv(
-    argv: list[str], packaged_conf: bool = False, gym_packages: tuple[str, ...] = ("envs",)
+    argv: list[str], packaged_conf: bool = False, gym_packages: tuple[str, ...] = ("twodrl_envs",)
 ) -> list[str]:
     """Make rl-zoo3's command line ready for this project (used by :mod:`sb3_twodrl.cli`).
 
     Registers ``twoda2c`` and ``twodppo`` (:func:`register_zoo`), imports ``gym_packages`` that are installed (so
-    ``--gym-packages envs`` is optional), and, when ``packaged_conf`` and no ``-conf/--conf-file`` is given, adds
+    ``--gym-packages twodrl_envs`` is optional), and, when ``packaged_conf`` and no ``-conf/--conf-file`` is given, adds
     ``--conf-file`` with the packaged ``<algo>.yml`` (:func:`~sb3_twodrl.hyperparams.hyperparams_path`) of the
     algos in :data:`~sb3_twodrl.hyperparams.PACKAGED`; the other algos keep rl-zoo3's own files.
     """

@@ -24,6 +24,7 @@ from collections.abc import Iterator
 
 import numpy as np
 import torch as th
+import twodrl_envs  # noqa: F401  (registers the Nomad office ids)
 from stable_baselines3 import A2C, PPO
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.env_util import make_vec_env
@@ -31,7 +32,6 @@ from stable_baselines3.common.utils import explained_variance
 from stable_baselines3.common.vec_env import VecEnv
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvStepReturn
 
-import envs  # noqa: F401  (registers the Nomad office ids)
 import sb3_twodrl.common.fast as fast
 import sb3_twodrl.common.on_policy as on_policy
 import sb3_twodrl.common.policies as policies

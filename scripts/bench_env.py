@@ -22,9 +22,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this checkout's 
 
 import gymnasium as gym
 import numpy as np
-
-import envs  # noqa: F401  (registers the IDs)
-from envs.nomad.batched import BatchedNomadOffice
+import twodrl_envs  # noqa: F401  (registers the IDs)
+from twodrl_envs.nomad.batched import BatchedNomadOffice
 
 
 def single_env_rate(env_id: str, steps: int, seed: int = 0, n_actions: int | None = None) -> tuple[float, float]:
@@ -65,10 +64,10 @@ def main() -> None:
         print(f"{policy} policy:")
         print(f"  {'CartPole-v1 steps/s':44s} {cartpole:12,.0f}   (mean episode {cp_len:.1f} steps)")
         for env_id in ("NomadOffice-v0", "NomadOfficeMemorable-v0"):
-            rate, length = single_env_rate(f"envs:{env_id}", args.steps, n_actions=n_actions)
+            rate, length = single_env_rate(f"twodrl_envs:{env_id}", args.steps, n_actions=n_actions)
             print(f"  {env_id + ' steps/s':44s} {rate:12,.0f}   (mean episode {length:.1f} steps)")
             print(f"  {env_id + ' / CartPole-v1 (>= 0.5)':44s} {rate / cartpole:12.2f}")
-    real, _ = single_env_rate("envs:NomadOfficeReal-v0", args.steps // 10)
+    real, _ = single_env_rate("twodrl_envs:NomadOfficeReal-v0", args.steps // 10)
     batched = batched_rate(args.n_envs, args.batched_steps)
     print(f"{f'batched N={args.n_envs} noisy robot-steps/s (>= 1e6)':46s} {batched:12,.0f}")
     print(f"{'NomadOfficeReal-v0 steps/s (uniform)':46s} {real:12,.0f}")

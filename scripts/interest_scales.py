@@ -19,8 +19,8 @@ import numpy as np
 import torch as th
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.env_util import make_vec_env
+from twodrl_envs.nomad.batched import make_sb3_vec_env
 
-from envs.nomad.batched import make_sb3_vec_env
 from twodrl_bench.variants import INTEREST_MODES, PREFERENCE_MODES
 from twodrl_bench.variants import VariantTwoDimA2C as TwoDimA2C  # the interest modes are variants
 

@@ -15,12 +15,11 @@ import argparse
 from pathlib import Path
 
 import numpy as np
-
-from envs.memorable.recording import shortest_paths
-from envs.nomad.gap import k_convergence, odometry_errors, systematic_difference
-from envs.nomad.office import office_core
-from envs.nomad.realistic import RealisticModel
-from envs.nomad.sensors import BEARINGS, N_SONAR, exact_ranges
+from twodrl_envs.memorable.recording import shortest_paths
+from twodrl_envs.nomad.gap import k_convergence, odometry_errors, systematic_difference
+from twodrl_envs.nomad.office import office_core
+from twodrl_envs.nomad.realistic import RealisticModel
+from twodrl_envs.nomad.sensors import BEARINGS, N_SONAR, exact_ranges
 
 
 def default_poses(core) -> list[tuple[float, float]]:

@@ -249,11 +249,12 @@ def test_the_coefficients_course_is_kept_per_tenth_of_the_budget_and_saved(algo,
 
 def test_an_epoch_runs_rows_carry_the_coefficient_of_a_learned_one_only(tmp_path) -> None:
     """The paper's epochs (no set budget): each row holds the last update's alpha and entropy fraction."""
-    import envs  # noqa: F401  (registers the IDs)
+    import twodrl_envs  # noqa: F401  (registers the IDs)
+
     from twodrl_bench import RunSpec, run_pair
 
     hp = {"n_envs": 4, "gamma": 0.9, "n_steps": 5}
-    common = dict(epochs=2, learn_episodes=4, test_episodes=2, out_dir=str(tmp_path), gym_packages=["envs"])
+    common = dict(epochs=2, learn_episodes=4, test_episodes=2, out_dir=str(tmp_path), gym_packages=["twodrl_envs"])
     auto = {**hp, "ent_coef": "auto", "target_entropy_fraction": 0.5, "ent_coef_lr": 0.01}
     rows = run_pair(RunSpec("NomadOffice-v0", "a2c_auto", 3, hyperparams=auto, tensorboard=False, **common))
     assert [row["ent_coef"] < 1.0 for row in rows] == [True, True]  # a fresh actor is above half the maximum

@@ -1,4 +1,4 @@
-"""The benchmark on public tasks: envs.public's split wrappers against the envs' own signals, a smoke run of
+"""The benchmark on public tasks: twodrl_envs.public's split wrappers against the envs' own signals, a smoke run of
 every task's spec (both arms), and its report (twodrl_bench.reports.benchmark) against the committed tables."""
 
 from __future__ import annotations
@@ -18,7 +18,8 @@ import yaml
 pytest.importorskip("rl_zoo3")
 pytest.importorskip("scipy")
 
-import envs  # noqa: F401  (registers the IDs)
+import twodrl_envs  # noqa: F401  (registers the IDs)
+
 from sb3_twodrl.common.splitting import split_info
 from twodrl_bench.reports.benchmark import report, verdict
 from twodrl_bench.timesteps import resolve_arm, run_job
@@ -122,7 +123,7 @@ def test_smoke_each_task_spec_trains_and_evaluates_its_arms(tmp_path, task: str,
         protocol = {**spec["protocol"], "timesteps": 512, "eval_episodes": 1}
         job_arm = {"name": arm, "algo": spec["arms"][arm]["algo"]}
         job_arm["hyperparams"] = resolve_arm(spec["arms"][arm], spec["env"], protocol)
-        (row,) = run_job(job_arm, spec["env"], {}, protocol, 0, str(tmp_path), ["envs"])
+        (row,) = run_job(job_arm, spec["env"], {}, protocol, 0, str(tmp_path), ["twodrl_envs"])
         assert row["arm"] == arm and row["task"] == task and row["n_timesteps"] == 512
         assert math.isfinite(row["final_return"]) and row["final_events"] >= 0 and row["train_episodes"] >= 0
         assert len(json.loads(row["curve"])) == 20

@@ -11,9 +11,9 @@ from dataclasses import replace
 import gymnasium as gym
 import numpy as np
 import pytest
+import twodrl_envs  # noqa: F401  (registers the IDs)
 from gymnasium.vector import AutoresetMode, SyncVectorEnv
 
-import envs  # noqa: F401  (registers the IDs)
 from sb3_twodrl import TwoDimA2C
 from twodrl_bench import RunSpec, VectorEnvAdapter, algo_class, make_train_env, run_pair
 from twodrl_bench import epochs as runner_module
@@ -28,7 +28,7 @@ HP = {
 
 def spec(tmp_path, algo: str, **kwargs) -> RunSpec:
     base = RunSpec(ENV, algo, 3, epochs=4, learn_episodes=8, test_episodes=4, hyperparams=HP[algo], out_dir="")
-    return replace(base, out_dir=str(tmp_path), gym_packages=["envs"], tensorboard=False, **kwargs)
+    return replace(base, out_dir=str(tmp_path), gym_packages=["twodrl_envs"], tensorboard=False, **kwargs)
 
 
 def without_wall(rows: list[dict]) -> list[dict]:

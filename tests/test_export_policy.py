@@ -8,9 +8,9 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch as th
+import twodrl_envs  # noqa: F401
 from stable_baselines3 import A2C
 
-import envs  # noqa: F401
 from sb3_twodrl import TwoDimA2C
 from sb3_twodrl.export import export_onnx, export_policy, main
 
@@ -18,7 +18,7 @@ from sb3_twodrl.export import export_onnx, export_policy, main
 @pytest.mark.parametrize("algo", [TwoDimA2C, A2C])
 def test_exported_actions_equal_deterministic_predict(tmp_path, algo):
     th.manual_seed(0)
-    env = gym.make("envs:NomadOfficeMemorable-v0")
+    env = gym.make("twodrl_envs:NomadOfficeMemorable-v0")
     model = algo("MlpPolicy", env, n_steps=8, gamma=0.9, seed=0, device="cpu")
     model.learn(64)  # a few updates, so the weights are not the initial ones
     path = export_policy(model, tmp_path / "policy.pt")
@@ -33,7 +33,7 @@ def test_exported_actions_equal_deterministic_predict(tmp_path, algo):
 
 
 def test_cli(tmp_path):
-    model = TwoDimA2C("MlpPolicy", gym.make("envs:NomadOfficeMemorable-v0"), seed=0, device="cpu")
+    model = TwoDimA2C("MlpPolicy", gym.make("twodrl_envs:NomadOfficeMemorable-v0"), seed=0, device="cpu")
     model.save(tmp_path / "m.zip")
     main([str(tmp_path / "m.zip"), str(tmp_path / "p.pt")])
     # the robot side needs torch only: load and run with stable_baselines3 and sb3_twodrl blocked
@@ -47,7 +47,7 @@ def test_cli(tmp_path):
 
 
 def test_cli_loads_the_named_algorithm(tmp_path, capsys):
-    model = A2C("MlpPolicy", gym.make("envs:NomadOfficeMemorable-v0"), seed=0, device="cpu")
+    model = A2C("MlpPolicy", gym.make("twodrl_envs:NomadOfficeMemorable-v0"), seed=0, device="cpu")
     model.save(tmp_path / "m.zip")
     with pytest.raises(ValueError, match="saved by another algorithm"):  # the default --algo is twoda2c
         main([str(tmp_path / "m.zip"), str(tmp_path / "p.pt")])
@@ -61,7 +61,7 @@ def test_cli_loads_the_named_algorithm(tmp_path, capsys):
 def _observations(n_random: int, seed: int = 2) -> np.ndarray:
     """61 readings of the stand-in robot under random moves (reset with ``seed``), then ``n_random`` random vectors."""
     rng = np.random.default_rng(0)
-    real = gym.make("envs:NomadOfficeReal-v0")
+    real = gym.make("twodrl_envs:NomadOfficeReal-v0")
     obs = [real.reset(seed=seed)[0]]
     for _ in range(60):
         o, _, term, trunc, _ = real.step(int(rng.integers(4)))
@@ -74,7 +74,9 @@ def test_onnx_actions_equal_deterministic_predict(tmp_path, algo):
     ort = pytest.importorskip("onnxruntime")
     pytest.importorskip("onnx")
     th.manual_seed(0)
-    model = algo("MlpPolicy", gym.make("envs:NomadOfficeMemorable-v0"), n_steps=8, gamma=0.9, seed=0, device="cpu")
+    model = algo(
+        "MlpPolicy", gym.make("twodrl_envs:NomadOfficeMemorable-v0"), n_steps=8, gamma=0.9, seed=0, device="cpu"
+    )
     model.learn(64)
     path = export_onnx(model, tmp_path / "policy.onnx")
     session = ort.InferenceSession(str(path))
@@ -91,7 +93,9 @@ def test_onnx_actions_equal_deterministic_predict(tmp_path, algo):
 def test_onnx_cli_runs_without_torch_or_sb3(tmp_path):
     pytest.importorskip("onnxruntime")
     pytest.importorskip("onnx")
-    TwoDimA2C("MlpPolicy", gym.make("envs:NomadOfficeMemorable-v0"), seed=0, device="cpu").save(tmp_path / "m.zip")
+    TwoDimA2C("MlpPolicy", gym.make("twodrl_envs:NomadOfficeMemorable-v0"), seed=0, device="cpu").save(
+        tmp_path / "m.zip"
+    )
     main([str(tmp_path / "m.zip"), str(tmp_path / "p.onnx"), "--format", "onnx"])
     code = (
         "import sys; sys.modules['torch'] = None; sys.modules['stable_baselines3'] = None; "

@@ -24,7 +24,7 @@ def test_the_algorithms_load_no_module_of_the_bench_nor_the_envs() -> None:
     library, modules = json.loads(result.stdout.splitlines()[-1])
     assert Path(library).parent == LIBRARY  # this checkout's library
     assert "sb3_twodrl.a2c.twodim_a2c" in modules and "sb3_twodrl.ppo.twodim_ppo" in modules
-    outside = [name for name in modules if name.split(".")[0] in ("twodrl_bench", "envs")]
+    outside = [name for name in modules if name.split(".")[0] in ("twodrl_bench", "twodrl_envs", "envs")]
     assert not outside, outside
 
 

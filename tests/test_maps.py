@@ -6,13 +6,13 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import pytest
+import twodrl_envs  # noqa: F401  (registers the IDs)
+from twodrl_envs.memorable.cli import main as record_main
+from twodrl_envs.nomad.batched import make_sb3_vec_env
+from twodrl_envs.nomad.dilemma import measure
+from twodrl_envs.nomad.geometry import SHIPPED_MAPS, load_map
+from twodrl_envs.nomad.office import office_core
 
-import envs  # noqa: F401  (registers the IDs)
-from envs.memorable.cli import main as record_main
-from envs.nomad.batched import make_sb3_vec_env
-from envs.nomad.dilemma import measure
-from envs.nomad.geometry import SHIPPED_MAPS, load_map
-from envs.nomad.office import office_core
 from sb3_twodrl.callbacks import EpisodeTracker, summarize_episodes
 from twodrl_bench.vec_env import make_train_env
 

@@ -5,8 +5,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-from envs.memorable.database import (
+from twodrl_envs.memorable.database import (
     CSV_COLUMNS,
     SCHEMA_VERSION,
     import_csv,
@@ -14,10 +13,10 @@ from envs.memorable.database import (
     record_database,
     save_database,
 )
-from envs.nomad.geometry import default_map_path
-from envs.nomad.office import office_core
-from envs.nomad.realistic import RealisticModel
-from envs.nomad.sensors import HIGH_CM, LOW_CM, NoiseModel
+from twodrl_envs.nomad.geometry import default_map_path
+from twodrl_envs.nomad.office import office_core
+from twodrl_envs.nomad.realistic import RealisticModel
+from twodrl_envs.nomad.sensors import HIGH_CM, LOW_CM, NoiseModel
 
 
 @pytest.fixture(scope="module", params=["noise", "realistic"])

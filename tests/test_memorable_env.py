@@ -4,11 +4,11 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
+from twodrl_envs import MAX_EPISODE_STEPS
+from twodrl_envs.memorable.database import SensorDatabase, record_database
+from twodrl_envs.memorable.env import BatchedNomadOfficeMemorable, NomadOfficeMemorableEnv, make_memorable_vec_env
+from twodrl_envs.nomad.office import office_core
 
-from envs import MAX_EPISODE_STEPS
-from envs.memorable.database import SensorDatabase, record_database
-from envs.memorable.env import BatchedNomadOfficeMemorable, NomadOfficeMemorableEnv, make_memorable_vec_env
-from envs.nomad.office import office_core
 from tests.test_nomad_batched import assert_batched_equals_singles
 
 
@@ -30,7 +30,7 @@ def _rollout(env, actions, seed):
 
 
 def test_check_env_and_registration():
-    env = gym.make("envs:NomadOfficeMemorable-v0")
+    env = gym.make("twodrl_envs:NomadOfficeMemorable-v0")
     check_env(env.unwrapped, skip_render_check=True)
     assert env.spec.max_episode_steps == MAX_EPISODE_STEPS
     assert env.observation_space.shape == (34,)
@@ -42,8 +42,8 @@ def test_ideal_k1_database_gives_exactly_the_ideal_observations(ideal_db):
     actions = rng.integers(0, 4, size=3000)
     # bias eastwards so episodes go through the shortcut and sometimes reach the goal
     actions[rng.random(3000) < 0.4] = 1
-    ideal = _rollout(gym.make("envs:NomadOffice-v0"), actions, seed=5)
-    replay = _rollout(gym.make("envs:NomadOfficeMemorable-v0", database=ideal_db), actions, seed=5)
+    ideal = _rollout(gym.make("twodrl_envs:NomadOffice-v0"), actions, seed=5)
+    replay = _rollout(gym.make("twodrl_envs:NomadOfficeMemorable-v0", database=ideal_db), actions, seed=5)
     assert len(ideal) == len(replay)
     for (o1, r1, t1, u1, i1), (o2, r2, t2, u2, i2) in zip(ideal, replay, strict=True):
         assert o1.dtype == o2.dtype and np.array_equal(o1, o2)
@@ -76,9 +76,9 @@ def test_observations_are_recorded_readings_of_the_cell():
 
 def test_seeded_determinism():
     actions = np.random.default_rng(2).integers(0, 4, size=400)
-    a = _rollout(gym.make("envs:NomadOfficeMemorable-v0"), actions, seed=11)
-    b = _rollout(gym.make("envs:NomadOfficeMemorable-v0"), actions, seed=11)
-    c = _rollout(gym.make("envs:NomadOfficeMemorable-v0"), actions, seed=12)
+    a = _rollout(gym.make("twodrl_envs:NomadOfficeMemorable-v0"), actions, seed=11)
+    b = _rollout(gym.make("twodrl_envs:NomadOfficeMemorable-v0"), actions, seed=11)
+    c = _rollout(gym.make("twodrl_envs:NomadOfficeMemorable-v0"), actions, seed=12)
     assert all(np.array_equal(x[0], y[0]) and x[1:4] == y[1:4] for x, y in zip(a, b, strict=True))
     assert any(not np.array_equal(x[0], y[0]) for x, y in zip(a, c, strict=False))
 
@@ -104,7 +104,7 @@ def test_unrecorded_cells_are_obstacles(ideal_db):
 def test_batched_matches_single_envs():
     n, seed, steps = 4, 7, 300
     batched = BatchedNomadOfficeMemorable(n)
-    singles = [gym.make("envs:NomadOfficeMemorable-v0") for _ in range(n)]
+    singles = [gym.make("twodrl_envs:NomadOfficeMemorable-v0") for _ in range(n)]
     rng = np.random.default_rng(3)
     assert_batched_equals_singles(batched, singles, seed, (rng.integers(0, 4, size=n) for _ in range(steps)))
 

@@ -3,10 +3,9 @@
 import gymnasium as gym
 import numpy as np
 import pytest
+import twodrl_envs  # noqa: F401  (registers the IDs)
 from stable_baselines3.common.vec_env import VecMonitor
-
-import envs  # noqa: F401  (registers the IDs)
-from envs.nomad.batched import BatchedNomadOffice, make_sb3_vec_env
+from twodrl_envs.nomad.batched import BatchedNomadOffice, make_sb3_vec_env
 
 N_ENVS, STEPS, SEED = 6, 150, 11
 
@@ -37,7 +36,7 @@ def assert_batched_equals_singles(batched, singles, seed, actions) -> int:
 def test_batched_equals_single_envs(sensor_noise, odometry):
     kwargs = {"sensor_noise": sensor_noise, "observe_odometry": odometry, "max_episode_steps": 40}
     batched = BatchedNomadOffice(N_ENVS, **kwargs)
-    singles = [gym.make("envs:NomadOffice-v0", **kwargs) for _ in range(N_ENVS)]
+    singles = [gym.make("twodrl_envs:NomadOffice-v0", **kwargs) for _ in range(N_ENVS)]
     actions = np.random.default_rng(0).integers(4, size=(STEPS, N_ENVS))
     n_done = assert_batched_equals_singles(batched, singles, SEED, actions)
     assert n_done > N_ENVS  # autoreset was exercised

@@ -1,15 +1,14 @@
 """The default office poses the paper's dilemma (properties P1-P5, docs/nomad.md) before any learning.
 
-The figures are exact (``envs.nomad.dilemma``); one test checks them against walks of the batched env.
+The figures are exact (``twodrl_envs.nomad.dilemma``); one test checks them against walks of the batched env.
 """
 
 import gymnasium as gym
 import numpy as np
 import pytest
-
-from envs import MAX_EPISODE_STEPS
-from envs.nomad.batched import BatchedNomadOffice
-from envs.nomad.dilemma import (
+from twodrl_envs import MAX_EPISODE_STEPS
+from twodrl_envs.nomad.batched import BatchedNomadOffice
+from twodrl_envs.nomad.dilemma import (
     GAMMA,
     eps_policy,
     expected_return,
@@ -20,7 +19,7 @@ from envs.nomad.dilemma import (
     route_length,
     wall_avoiding_policy,
 )
-from envs.nomad.office import office_core
+from twodrl_envs.nomad.office import office_core
 
 EPS_GRID = np.array([0.1, 0.2, 0.25, 0.3, 0.35])
 
@@ -63,7 +62,7 @@ def test_open_office_lacks_the_dilemma():
 def test_each_routes_shortest_path_carries_its_label(route):
     core = office_core()
     actions = follower_actions(core, route)
-    env = gym.make("envs:NomadOffice-v0")
+    env = gym.make("twodrl_envs:NomadOffice-v0")
     env.reset(seed=0)
     cell, steps = core.start_cell, 0
     while True:

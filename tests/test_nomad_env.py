@@ -5,10 +5,9 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
+from twodrl_envs import MAX_EPISODE_STEPS
 
-from envs import MAX_EPISODE_STEPS
-
-IDS = ["envs:NomadOffice-v0", "envs:NomadOfficeReal-v0"]
+IDS = ["twodrl_envs:NomadOffice-v0", "twodrl_envs:NomadOfficeReal-v0"]
 N, E, S, W = 0, 1, 2, 3
 SHORTCUT = [S] + [E] * 16  # from (60, 85) to the bent passage's junction row y = 75, then east through it
 DETOUR = [N] * 11 + [E] * 16  # north to the corridor row y = 195, east over the partition
@@ -34,7 +33,7 @@ def run(env, actions):
 
 @pytest.mark.parametrize(("actions", "route"), [(SHORTCUT, "shortcut"), (DETOUR, "detour")])
 def test_scripted_routes_reach_goal(actions, route):
-    env = gym.make("envs:NomadOffice-v0")
+    env = gym.make("twodrl_envs:NomadOffice-v0")
     env.reset(seed=0)
     rewards, infos, terminated = run(env, actions)
     assert terminated and len(rewards) == len(actions)
@@ -48,7 +47,7 @@ def test_scripted_routes_reach_goal(actions, route):
 
 
 def test_route_label_is_the_route_taken_to_the_goal():
-    env = gym.make("envs:NomadOffice-v0")
+    env = gym.make("twodrl_envs:NomadOffice-v0")
     env.reset(seed=0)
     # up into the corridor beside the start room: not yet the detour
     _, infos, _ = run(env, [N] * 11)
@@ -60,7 +59,7 @@ def test_route_label_is_the_route_taken_to_the_goal():
 
 
 def test_collision_into_wall_and_one_cm_clearance_along_wall():
-    env = gym.make("envs:NomadOffice-v0")
+    env = gym.make("twodrl_envs:NomadOffice-v0")
     env.reset(options={"position": (60.0, 40.0)})
     _, reward, terminated, _, info = env.step(S)  # centre would be 30 cm from the floor: touching
     assert terminated and info["collision"] and info["punishment"] == 1.0 and reward == -1.0
@@ -73,13 +72,13 @@ def test_collision_into_wall_and_one_cm_clearance_along_wall():
 
 @pytest.mark.parametrize("position", [(170.0, 110.0), (90.0, 20.0), (-50.0, 60.0), (90.0, 400.0), (1, 2, 3), "x"])
 def test_reset_position_in_wall_or_outside_is_value_error(position):
-    env = gym.make("envs:NomadOffice-v0")
+    env = gym.make("twodrl_envs:NomadOffice-v0")
     with pytest.raises(ValueError, match="position"):
         env.reset(options={"position": position})
 
 
 def test_reset_position_on_lattice_matches_walking_there():
-    env = gym.make("envs:NomadOffice-v0")
+    env = gym.make("twodrl_envs:NomadOffice-v0")
     env.reset(seed=0)
     walked, *_ = env.step(E)
     placed, info = env.reset(options={"position": (70.0, 85.0)})
@@ -110,17 +109,17 @@ def test_same_seed_same_episode(env_id, kwargs):
 
 
 def test_real_model_is_noisy_and_slips():
-    env = gym.make("envs:NomadOfficeReal-v0")
+    env = gym.make("twodrl_envs:NomadOfficeReal-v0")
     obs0, _ = env.reset(seed=1)
     _, _, _, _, info = env.step(E)
     assert info["position_cm"] != (70.0, 85.0)
     assert obs0[-2:] == pytest.approx(np.array([60 / 290, 85 / 305]))  # odometry is dead reckoning
-    ideal, _ = gym.make("envs:NomadOffice-v0").reset(seed=1)
+    ideal, _ = gym.make("twodrl_envs:NomadOffice-v0").reset(seed=1)
     assert not np.array_equal(obs0[:32], ideal[:32])
 
 
 def test_truncated_by_time_limit():
-    env = gym.make("envs:NomadOffice-v0")
+    env = gym.make("twodrl_envs:NomadOffice-v0")
     env.reset(seed=0)
     for t in range(MAX_EPISODE_STEPS):
         *_, terminated, truncated, info = env.step(E if t % 2 == 0 else W)
@@ -141,11 +140,11 @@ def test_truncated_by_time_limit():
 )
 def test_bad_constructor_arguments(kwargs, error, message):
     with pytest.raises(error, match=message):
-        gym.make("envs:NomadOffice-v0", **kwargs)
+        gym.make("twodrl_envs:NomadOffice-v0", **kwargs)
 
 
 def test_bad_action_and_options():
-    env = gym.make("envs:NomadOffice-v0").unwrapped
+    env = gym.make("twodrl_envs:NomadOffice-v0").unwrapped
     env.reset(seed=0)
     with pytest.raises(ValueError, match="action"):
         env.step(4)
@@ -154,7 +153,7 @@ def test_bad_action_and_options():
 
 
 def test_render_rgb_array():
-    env = gym.make("envs:NomadOffice-v0", render_mode="rgb_array")
+    env = gym.make("twodrl_envs:NomadOffice-v0", render_mode="rgb_array")
     env.reset(seed=0)
     run(env, [N, E, E])
     frame = env.render()
@@ -164,11 +163,11 @@ def test_render_rgb_array():
 @pytest.mark.parametrize(
     ("env_id", "kwargs", "start"),
     [
-        ("envs:NomadOffice-v0", {}, (60.0, 85.0)),
-        ("envs:NomadOffice-v0", {"map": "open"}, (90.0, 60.0)),
-        ("envs:NomadOfficeOpen-v0", {}, (90.0, 60.0)),
-        ("envs:NomadOfficeMemorableOpen-v0", {}, (90.0, 60.0)),  # with the open office's own database
-        ("envs:NomadOfficeMemorable-v0", {"map": "office"}, (60.0, 85.0)),
+        ("twodrl_envs:NomadOffice-v0", {}, (60.0, 85.0)),
+        ("twodrl_envs:NomadOffice-v0", {"map": "open"}, (90.0, 60.0)),
+        ("twodrl_envs:NomadOfficeOpen-v0", {}, (90.0, 60.0)),
+        ("twodrl_envs:NomadOfficeMemorableOpen-v0", {}, (90.0, 60.0)),  # with the open office's own database
+        ("twodrl_envs:NomadOfficeMemorable-v0", {"map": "office"}, (60.0, 85.0)),
     ],
 )
 def test_shipped_maps_by_name_and_id(env_id, kwargs, start):
@@ -179,4 +178,4 @@ def test_shipped_maps_by_name_and_id(env_id, kwargs, start):
 
 def test_unknown_map_name_is_value_error():
     with pytest.raises(ValueError, match=r"closed.*does not exist"):
-        gym.make("envs:NomadOffice-v0", map="closed")
+        gym.make("twodrl_envs:NomadOffice-v0", map="closed")

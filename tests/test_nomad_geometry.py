@@ -6,10 +6,9 @@ import os
 
 import numpy as np
 import pytest
-
-from envs.nomad.geometry import ROBOT_RADIUS_CM, load_map, swept_clearance
-from envs.nomad.office import office_core
-from envs.nomad.sensors import NoiseModel, exact_ranges, normalise, realistic_readings
+from twodrl_envs.nomad.geometry import ROBOT_RADIUS_CM, load_map, swept_clearance
+from twodrl_envs.nomad.office import office_core
+from twodrl_envs.nomad.sensors import NoiseModel, exact_ranges, normalise, realistic_readings
 
 OFFICE = load_map()
 

@@ -1,16 +1,15 @@
-"""The stand-in robot (envs.nomad.realistic): one geometry test per artifact, drift, seeding, batching."""
+"""The stand-in robot (twodrl_envs.nomad.realistic): one geometry test per artifact, drift, seeding, batching."""
 
 import json
 
 import gymnasium as gym
 import numpy as np
 import pytest
-
-import envs  # noqa: F401
-from envs.nomad import sensors
-from envs.nomad.geometry import load_map
-from envs.nomad.office import office_core
-from envs.nomad.realistic import RealisticModel, Surface
+import twodrl_envs  # noqa: F401
+from twodrl_envs.nomad import sensors
+from twodrl_envs.nomad.geometry import load_map
+from twodrl_envs.nomad.office import office_core
+from twodrl_envs.nomad.realistic import RealisticModel, Surface
 
 PLASTER = Surface("plaster", 0.9, 7.5, 1.0)
 # noise-free: every reading is the deterministic echo geometry
@@ -146,7 +145,7 @@ def test_drift_grows_with_the_number_of_moves():
 
 def test_real_env_odometry_is_dead_reckoning_and_drifts(tmp_path):
     office_with(tmp_path, [[0, 0, 1000, 0], [1000, 0, 1000, 1000], [1000, 1000, 0, 1000], [0, 1000, 0, 0]])
-    env = gym.make("envs:NomadOfficeReal-v0", map=tmp_path / "room.json")
+    env = gym.make("twodrl_envs:NomadOfficeReal-v0", map=tmp_path / "room.json")
     obs, info = env.reset(seed=0)
     for _ in range(30):
         obs, _, terminated, _, info = env.step(1)  # east through an empty room
@@ -157,7 +156,7 @@ def test_real_env_odometry_is_dead_reckoning_and_drifts(tmp_path):
 
 
 def test_gap_is_systematic_and_straight_runs_drift_more():
-    from envs.nomad.gap import odometry_errors, systematic_difference
+    from twodrl_envs.nomad.gap import odometry_errors, systematic_difference
 
     core = office_core()
     diff = systematic_difference(core, RealisticModel(), draws=3, seed=0)
@@ -171,15 +170,15 @@ def test_gap_is_systematic_and_straight_runs_drift_more():
 
 
 def test_vector_entry_point_is_the_batched_real_env():
-    venv = gym.make_vec("envs:NomadOfficeReal-v0", num_envs=2, vectorization_mode="vector_entry_point")
+    venv = gym.make_vec("twodrl_envs:NomadOfficeReal-v0", num_envs=2, vectorization_mode="vector_entry_point")
     obs, _ = venv.reset(seed=0)
-    single, _ = gym.make("envs:NomadOfficeReal-v0").reset(seed=1)
+    single, _ = gym.make("twodrl_envs:NomadOfficeReal-v0").reset(seed=1)
     np.testing.assert_array_equal(obs[1], single)
 
 
 def test_seeded_real_env_repeats_exactly():
     def trace(seed):
-        env = gym.make("envs:NomadOfficeReal-v0")
+        env = gym.make("twodrl_envs:NomadOfficeReal-v0")
         env.action_space.seed(seed)
         out = [env.reset(seed=seed)[0]]
         for _ in range(40):
@@ -219,7 +218,7 @@ def test_readings_are_valid_and_the_ideal_simulator_stays_exact():
         .ranges(cells, np.arange(len(cells), dtype=np.uint64), np.ones(len(cells), int))
     )
     assert np.all((ranges >= sensors.LOW_CM) & (ranges <= sensors.HIGH_CM))
-    ideal = gym.make("envs:NomadOffice-v0")
+    ideal = gym.make("twodrl_envs:NomadOffice-v0")
     obs, _ = ideal.reset(seed=0)
     np.testing.assert_array_equal(obs[:32], core.readings[core.start_cell])
 
@@ -242,15 +241,15 @@ def test_bad_parameters_are_named(kwargs, name):
 
 def test_real_env_rejects_a_model_of_the_wrong_type():
     with pytest.raises(TypeError, match="model"):
-        gym.make("envs:NomadOfficeReal-v0", model="realistic")
+        gym.make("twodrl_envs:NomadOfficeReal-v0", model="realistic")
 
 
 def test_batched_real_env_equals_single_envs():
-    from envs.nomad.realistic_batched import BatchedNomadOfficeReal
+    from twodrl_envs.nomad.realistic_batched import BatchedNomadOfficeReal
 
     n, steps = 3, 260
     batched = BatchedNomadOfficeReal(n)
-    singles = [gym.make("envs:NomadOfficeReal-v0") for _ in range(n)]
+    singles = [gym.make("twodrl_envs:NomadOfficeReal-v0") for _ in range(n)]
     obs_b, _ = batched.reset(seed=10)
     obs_s = [env.reset(seed=10 + i)[0] for i, env in enumerate(singles)]
     np.testing.assert_array_equal(obs_b, np.stack(obs_s))
@@ -273,8 +272,7 @@ def test_batched_real_env_equals_single_envs():
 
 def test_batched_real_env_trains_with_sb3():
     from stable_baselines3 import A2C
-
-    from envs.nomad.realistic_batched import make_real_vec_env
+    from twodrl_envs.nomad.realistic_batched import make_real_vec_env
 
     venv = make_real_vec_env(4, seed=0, observe_odometry=False)
     assert venv.observation_space.shape == (32,)

@@ -15,13 +15,13 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch as th
+import twodrl_envs  # noqa: F401  (registers the IDs)
 from stable_baselines3 import A2C
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import DummyVecEnv
+from twodrl_envs.nomad.office import GOAL_REWARD
 
-import envs  # noqa: F401  (registers the IDs)
-from envs.nomad.office import GOAL_REWARD
 from tests.tabular_oracle import TabularActorCritic
 from twodrl_bench.variants import VariantTwoDimA2C
 

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import optuna
 import pytest
+import twodrl_envs  # noqa: F401  (registers the Nomad office ids)
 import yaml
 
-import envs  # noqa: F401  (registers the Nomad office ids)
 import tests.toy_nav  # noqa: F401  (registers ToyNav-v0)
 from sb3_twodrl import cli, export
 from sb3_twodrl.hyperparams import hyperparams_path

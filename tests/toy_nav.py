@@ -1,6 +1,6 @@
 """A scripted stand-in for the Nomad office: episodes whose outcome does not depend on the actions.
 
-It sets the same ``info`` keys as ``envs`` (``punishment``, ``route``, ``is_success``, ``collision``,
+It sets the same ``info`` keys as ``twodrl_envs`` (``punishment``, ``route``, ``is_success``, ``collision``,
 ``position_cm``) and the paper's evaluations, so that the metrics, zoo and reproduction code can be
 tested exactly and fast. ``import tests.toy_nav`` registers ``ToyNav-v0``.
 """

@@ -3,7 +3,7 @@ validates, resolves and compares specs.
 
 A spec is packaged as ``twodrl_bench/specs/<study>.yml`` or, for a study of several parts,
 ``twodrl_bench/specs/<study>/<part>.yml``; its name is that path without ``.yml``. Fields
-(``docs/studies.md``): ``name``, ``env``, ``env_kwargs`` ({}), ``gym_packages`` ([envs]), ``protocol``
+(``docs/studies.md``): ``name``, ``env``, ``env_kwargs`` ({}), ``gym_packages`` ([twodrl_envs]), ``protocol``
 (the paper's epochs ``{epochs, learn_episodes, test_episodes}`` or ``{timesteps, eval_episodes}``),
 ``seeds``, ``arms`` (name -> ``{algo, override, settings}``) and/or ``grid`` (points that expand into arms,
 kept in the spec for the report),
@@ -115,7 +115,7 @@ def validate(raw: Any, source: str = "spec") -> Spec:
         if not isinstance(spec[key], str) or not spec[key]:
             raise _fail(source, key, "must be a non-empty string", spec[key])
     spec["env_kwargs"] = _mapping(source, "env_kwargs", spec.get("env_kwargs") or {})
-    packages = spec.get("gym_packages", ["envs"])
+    packages = spec.get("gym_packages", ["twodrl_envs"])
     if not isinstance(packages, list) or not all(isinstance(p, str) for p in packages):
         raise _fail(source, "gym_packages", "must be a list of module names", packages)
     spec["gym_packages"] = packages

@@ -4,7 +4,7 @@ An env package offers a batched implementation through Gymnasium's registry: ``r
 vector_entry_point="pkg.module:Class")``, where ``Class(num_envs=N, **spec.kwargs,
 max_episode_steps=spec.max_episode_steps)`` is a ``gymnasium.vector.VectorEnv`` with same-step
 autoreset whose sub-env ``i`` reset with seed ``s + i`` behaves like ``gym.make(env_id)`` reset with
-seed ``s + i`` (``envs`` registers its ``NomadOffice-v0`` and ``NomadOfficeMemorable-v0`` batches
+seed ``s + i`` (``twodrl_envs`` registers its ``NomadOffice-v0`` and ``NomadOfficeMemorable-v0`` batches
 so). :class:`VectorEnvAdapter` turns it into an SB3 ``VecEnv``; nothing here imports the env
 package, which registers its IDs when its name (``gym_packages``) is imported.
 """

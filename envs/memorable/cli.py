@@ -6,7 +6,7 @@ K times, and files each reading (16 sonar, 16 IR) under its odometry's cell, as 
 would. ``--model noise``: placed exactly on each cell, K noisy ideal readings; ``--model ideal``:
 exact. A user with a real robot imports their log instead (``--from-csv log.csv``).
 ``--check`` only loads and checks the map (``ValueError`` messages of
-:func:`envs.nomad.office.office_core`) and prints what the robot sees of it.
+:func:`twodrl_envs.nomad.office.office_core`) and prints what the robot sees of it.
 
     sb3-twodrl-record-database --map my_office.json --check
     sb3-twodrl-record-database --map my_office.json --out my_office_k8.npz
@@ -18,12 +18,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from envs.memorable.database import import_csv, load_database, record_database, save_database
-from envs.nomad.dilemma import distance_to_goal
-from envs.nomad.geometry import SHIPPED_MAPS, OfficeMap
-from envs.nomad.office import OfficeCore, office_core
-from envs.nomad.realistic import RealisticModel
-from envs.nomad.sensors import NoiseModel
+from twodrl_envs.memorable.database import import_csv, load_database, record_database, save_database
+from twodrl_envs.nomad.dilemma import distance_to_goal
+from twodrl_envs.nomad.geometry import SHIPPED_MAPS, OfficeMap
+from twodrl_envs.nomad.office import OfficeCore, office_core
+from twodrl_envs.nomad.realistic import RealisticModel
+from twodrl_envs.nomad.sensors import NoiseModel
 
 MODELS = ("realistic", "noise", "ideal")
 

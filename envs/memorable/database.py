@@ -18,13 +18,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-from envs.memorable.recording import drive_and_record
-from envs.nomad import sensors
-from envs.nomad.geometry import ROBOT_RADIUS_CM, SHIPPED_MAPS, STEP_CM, OfficeMap, map_source
-from envs.nomad.office import OfficeCore, office_core
-from envs.nomad.realistic import RealisticModel
-from envs.nomad.sensors import HIGH_CM, LOW_CM
+from twodrl_envs.memorable.recording import drive_and_record
+from twodrl_envs.nomad import sensors
+from twodrl_envs.nomad.geometry import ROBOT_RADIUS_CM, SHIPPED_MAPS, STEP_CM, OfficeMap, map_source
+from twodrl_envs.nomad.office import OfficeCore, office_core
+from twodrl_envs.nomad.realistic import RealisticModel
+from twodrl_envs.nomad.sensors import HIGH_CM, LOW_CM
 
 SCHEMA_VERSION = 1
 FORMAT_NAME = "sb3-twodrl-memorable"
@@ -40,8 +39,8 @@ def _xy(xy: Any) -> str:
 def default_database_path(map: str | Path | None = None) -> Path:
     """The database shipped for a shipped map (realistic sensor model, K = 8); others get the office's.
 
-    ``map`` as :func:`envs.nomad.geometry.map_source` takes it: ``None``/``"office"`` is the default
-    office (``office_k8.npz``), a name in :data:`~envs.nomad.geometry.SHIPPED_MAPS` its ``<name>_k8.npz``.
+    ``map`` as :func:`twodrl_envs.nomad.geometry.map_source` takes it: ``None``/``"office"`` is the default
+    office (``office_k8.npz``), a name in :data:`~twodrl_envs.nomad.geometry.SHIPPED_MAPS` its ``<name>_k8.npz``.
     """
     source = map_source(map)
     name = next((name for name in SHIPPED_MAPS if source == map_source(name)), "office")
@@ -257,12 +256,12 @@ def record_database(
 ) -> SensorDatabase:
     """Record ``k`` readings per reachable cell of a virtual robot.
 
-    With ``model`` (a :class:`~envs.nomad.realistic.RealisticModel`, the stand-in robot of
+    With ``model`` (a :class:`~twodrl_envs.nomad.realistic.RealisticModel`, the stand-in robot of
     ``NomadOfficeReal-v0``) the robot records as a real one would: it drives to each cell by dead
     reckoning and files the reading taken at its drifted true pose under its odometry's cell
-    (:func:`envs.memorable.recording.drive_and_record`). Otherwise it is placed exactly on each
+    (:func:`twodrl_envs.memorable.recording.drive_and_record`). Otherwise it is placed exactly on each
     cell: ``noise=None`` records the ideal (exact) sensors, a
-    :class:`~envs.nomad.sensors.NoiseModel` adds per-reading noise to them. Readings are saturated
+    :class:`~twodrl_envs.nomad.sensors.NoiseModel` adds per-reading noise to them. Readings are saturated
     to the sensors' ranges as a real robot reports them. Unreachable free cells get no readings.
     """
     if isinstance(k, bool) or not isinstance(k, int) or k < 1:
@@ -276,7 +275,7 @@ def record_database(
         counts, per_cell, stats = drive_and_record(core, model, k, seed)
         recording = {
             "source": "simulated",
-            "sensor_model": "realistic (envs.nomad.realistic.RealisticModel, NomadOfficeReal-v0)",
+            "sensor_model": "realistic (twodrl_envs.nomad.realistic.RealisticModel, NomadOfficeReal-v0)",
             "model": model.describe(),
             "samples_per_cell": k,
             "seed": seed,
@@ -302,7 +301,7 @@ def record_database(
         rows.append(np.clip(exact, LOW_CM, HIGH_CM))
     recording = {
         "source": "simulated",
-        "sensor_model": "ideal" if noise is None else "noisy ideal (envs.nomad.sensors.NoiseModel)",
+        "sensor_model": "ideal" if noise is None else "noisy ideal (twodrl_envs.nomad.sensors.NoiseModel)",
         "noise_model": None if noise is None else asdict(noise),
         "samples_per_cell": k,
         "seed": seed,

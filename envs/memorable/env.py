@@ -13,12 +13,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-from envs import MAX_EPISODE_STEPS
-from envs.memorable.database import SensorDatabase, load_database
-from envs.nomad import sensors
-from envs.nomad.batched import BatchedNomadOffice, SB3VecEnvAdapter, make_sb3_vec_env
-from envs.nomad.office import NomadOfficeEnv, OfficeCore, counter_word
+from twodrl_envs import MAX_EPISODE_STEPS
+from twodrl_envs.memorable.database import SensorDatabase, load_database
+from twodrl_envs.nomad import sensors
+from twodrl_envs.nomad.batched import BatchedNomadOffice, SB3VecEnvAdapter, make_sb3_vec_env
+from twodrl_envs.nomad.office import NomadOfficeEnv, OfficeCore, counter_word
 
 
 class _Replay:
@@ -47,8 +46,8 @@ class _Replay:
 class NomadOfficeMemorableEnv(NomadOfficeEnv):
     """The Nomad office task trained from recorded readings (paper section 3.1, MEMORABLE).
 
-    ``database`` is a file written by :func:`envs.memorable.database.save_database`, a loaded
-    :class:`~envs.memorable.database.SensorDatabase`, or ``None`` for the shipped one (realistic
+    ``database`` is a file written by :func:`twodrl_envs.memorable.database.save_database`, a loaded
+    :class:`~twodrl_envs.memorable.database.SensorDatabase`, or ``None`` for the shipped one (realistic
     sensor model, K = 8); it must have been recorded in ``map``. Motion is on the lattice, so
     ``options["position"]`` must be a recorded cell.
     """

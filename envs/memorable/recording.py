@@ -1,7 +1,7 @@
 """Recording a sensor database as a real robot would: driving by dead reckoning.
 
 A real robot does not know where it is: it labels each recording with its odometry. The
-recorder below drives the stand-in robot of :mod:`envs.nomad.realistic` from the map's start to
+recorder below drives the stand-in robot of :mod:`twodrl_envs.nomad.realistic` from the map's start to
 every reachable lattice cell along the shortest lattice path, commanding 10 cm moves; the robot's
 true pose drifts (slip, scale and misalignment errors), the reading is taken at the true pose and
 filed under the cell its odometry reports. Each of the ``k`` tours drives every cell once, with
@@ -13,11 +13,10 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-
-from envs.nomad.geometry import ROBOT_RADIUS_CM, swept_clearance
-from envs.nomad.office import OfficeCore
-from envs.nomad.realistic import RealisticModel
-from envs.nomad.sensors import HIGH_CM, LOW_CM
+from twodrl_envs.nomad.geometry import ROBOT_RADIUS_CM, swept_clearance
+from twodrl_envs.nomad.office import OfficeCore
+from twodrl_envs.nomad.realistic import RealisticModel
+from twodrl_envs.nomad.sensors import HIGH_CM, LOW_CM
 
 
 def shortest_paths(core: OfficeCore) -> list[list[int]]:

@@ -3,7 +3,7 @@
 :class:`BatchedNomadOffice` is a ``gymnasium.vector.VectorEnv`` (same-step autoreset) that takes
 every option of ``NomadOffice-v0``: on the ideal lattice model, optionally with per-step sensor noise
 or with ``observation="cell"``, and off it with ``step_sd_cm`` / ``slip_sd_cm`` move noise. Sub-env
-``i`` reset with seed ``s`` behaves exactly like ``gym.make("envs:NomadOffice-v0")`` reset with seed
+``i`` reset with seed ``s`` behaves exactly like ``gym.make("twodrl_envs:NomadOffice-v0")`` reset with seed
 ``s`` and reset again after every episode (same observations, rewards, terminations, truncations and,
 with ``render_mode="rgb_array"``, frames). :class:`SB3VecEnvAdapter` exposes it to Stable-Baselines3
 as a ``VecEnv``.
@@ -20,11 +20,10 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvStepReturn
-
-from envs import MAX_EPISODE_STEPS
-from envs.nomad import sensors
-from envs.nomad.geometry import MOVES_CM, ROBOT_RADIUS_CM, STEP_CM, swept_clearance
-from envs.nomad.office import (
+from twodrl_envs import MAX_EPISODE_STEPS
+from twodrl_envs.nomad import sensors
+from twodrl_envs.nomad.geometry import MOVES_CM, ROBOT_RADIUS_CM, STEP_CM, swept_clearance
+from twodrl_envs.nomad.office import (
     COLLISION_PUNISHMENT,
     GOAL_REWARD,
     MOVE_PUNISHMENT,
@@ -33,7 +32,7 @@ from envs.nomad.office import (
     episode_keys,
     route_code_at,
 )
-from envs.nomad.sensors import NoiseModel
+from twodrl_envs.nomad.sensors import NoiseModel
 
 _ROUTE_NAMES = np.array(ROUTES, dtype=object)
 _INFO_KEYS = ("punishment", "collision", "route", "position_cm", "is_success")
@@ -240,7 +239,7 @@ class BatchedNomadOffice(VectorEnv):
         """One top-down RGB frame per sub-env (``render_mode="rgb_array"``), as each single env renders."""
         if self.render_mode != "rgb_array":
             return None
-        from envs.nomad.render import OfficeRenderer
+        from twodrl_envs.nomad.render import OfficeRenderer
 
         if self._renderer is None:
             self._renderer = OfficeRenderer(self.core.office)

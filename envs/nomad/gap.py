@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
-
-from envs.nomad.geometry import MOVES_CM
-from envs.nomad.office import OfficeCore
-from envs.nomad.realistic import RealisticModel
-from envs.nomad.sensors import HIGH_CM, LOW_CM
+from twodrl_envs.nomad.geometry import MOVES_CM
+from twodrl_envs.nomad.office import OfficeCore
+from twodrl_envs.nomad.realistic import RealisticModel
+from twodrl_envs.nomad.sensors import HIGH_CM, LOW_CM
 
 
 def systematic_difference(core: OfficeCore, model: RealisticModel, draws: int, seed: int) -> np.ndarray:
@@ -51,11 +50,11 @@ def odometry_errors(model: RealisticModel, moves: int, robots: int, seed: int, s
 def k_convergence(core: OfficeCore, model: RealisticModel, ks: tuple[int, ...], reference: int, seed: int) -> dict:
     """How many recorded readings per cell (K) a database needs to show a cell's typical sonar reading.
 
-    Records ``reference`` tours by dead reckoning (:func:`envs.memorable.recording.drive_and_record`)
+    Records ``reference`` tours by dead reckoning (:func:`twodrl_envs.memorable.recording.drive_and_record`)
     and returns, per ``K`` in ``ks``, the share of (reachable cell, sonar) pairs whose median over the
     first ``K`` readings differs by more than 50 cm from the median over all ``reference`` readings.
     """
-    from envs.memorable.recording import drive_and_record
+    from twodrl_envs.memorable.recording import drive_and_record
 
     counts, per_cell, _ = drive_and_record(core, model, reference, seed)
     cells = [r[:, :16] for r, c in zip(per_cell, counts, strict=True) if c >= reference]

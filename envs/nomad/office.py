@@ -10,9 +10,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
-
-from envs.nomad import sensors
-from envs.nomad.geometry import (
+from twodrl_envs.nomad import sensors
+from twodrl_envs.nomad.geometry import (
     MOVES_CM,
     ROBOT_RADIUS_CM,
     Lattice,
@@ -24,7 +23,7 @@ from envs.nomad.geometry import (
     map_source,
     swept_clearance,
 )
-from envs.nomad.sensors import NoiseModel
+from twodrl_envs.nomad.sensors import NoiseModel
 
 GOAL_REWARD = 5.0  # r_R, eq. 11
 COLLISION_PUNISHMENT = 1.0  # r_P on collision, eq. 12
@@ -41,7 +40,7 @@ class OfficeCore:
     ``ranges`` ``(n_cells, 32)`` are the exact sensor ranges (cm) of every free lattice cell and
     ``readings`` their normalised, saturated values; ``route_code`` (0 none, 1 shortcut, 2 detour)
     and ``goal`` label cells. A sensor database (MEMORABLE) records noisy readings per cell with
-    :meth:`envs.nomad.sensors.NoiseModel.sample` of ``ranges``.
+    :meth:`twodrl_envs.nomad.sensors.NoiseModel.sample` of ``ranges``.
     """
 
     office: OfficeMap
@@ -83,9 +82,9 @@ def _core(source: str, mtime_ns: int) -> OfficeCore:
 def office_core(map_path: str | Path | None = None) -> OfficeCore:
     """The (cached) :class:`OfficeCore` of a map file; ``None`` is the shipped office.
 
-    Every env loads its map here: the file is validated (:func:`~envs.nomad.geometry.load_map`) and
+    Every env loads its map here: the file is validated (:func:`~twodrl_envs.nomad.geometry.load_map`) and
     its goal must be reachable from the start on the lattice
-    (:func:`~envs.nomad.geometry.check_goal_reachable`), else ``ValueError``.
+    (:func:`~twodrl_envs.nomad.geometry.check_goal_reachable`), else ``ValueError``.
     """
     source = Path(map_source(map_path))
     # A missing file gets its error from load_map, uncached
@@ -103,7 +102,7 @@ _MASK64 = (1 << 64) - 1
 
 
 def counter_word(key: int, step: int) -> int:
-    """Word 0 of :func:`envs.nomad.sensors.counter_hash` of one ``(key, step)``, in Python integers.
+    """Word 0 of :func:`twodrl_envs.nomad.sensors.counter_hash` of one ``(key, step)``, in Python integers.
 
     A single env needs one word per reset or replayed reading; numpy's call overhead would cost more
     than the hash.
@@ -157,7 +156,7 @@ class NomadOfficeEnv(gym.Env):
 
     Actions ``Discrete(4)``: 0 north, 1 east, 2 south, 3 west, 10 cm each, heading fixed north.
     Observation (``observation="sensors"``, the default): 32 normalised readings (16 sonar, then 16 IR;
-    see :mod:`envs.nomad.sensors`) followed by the normalised odometry position unless
+    see :mod:`twodrl_envs.nomad.sensors`) followed by the normalised odometry position unless
     ``observe_odometry=False``. ``observation="cell"``: ``Discrete(n_cells)``, the index of the robot's
     lattice cell (``core.lattice.cells[i]`` is its centre), the task's Markov state, so that a
     one-hot linear actor and critic are the paper's tables (``docs/tabular.md``); it needs lattice
@@ -367,7 +366,7 @@ class NomadOfficeEnv(gym.Env):
         """Top-down RGB frame: walls, start, goal, trajectory, robot and its sonar cones."""
         if self.render_mode != "rgb_array":
             return None
-        from envs.nomad.render import OfficeRenderer
+        from twodrl_envs.nomad.render import OfficeRenderer
 
         if self._renderer is None:
             self._renderer = OfficeRenderer(self.core.office)

@@ -1,6 +1,6 @@
 """A stand-in for the physical Nomad 200: sonar, infrared and odometry artifacts (``NomadOfficeReal-v0``).
 
-The ideal simulator (``NomadOffice-v0``, :mod:`envs.nomad.sensors`) reads the exact nearest wall in
+The ideal simulator (``NomadOffice-v0``, :mod:`twodrl_envs.nomad.sensors`) reads the exact nearest wall in
 each sonar cone and moves exactly 10 cm. A real Nomad 200 does neither; this module models the
 documented reasons, each parameter with its source in ``docs/realistic.md``:
 
@@ -33,11 +33,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-from envs.nomad import sensors
-from envs.nomad.geometry import MOVES_CM, ROBOT_RADIUS_CM, OfficeMap, swept_clearance
-from envs.nomad.office import NomadOfficeEnv, route_code_at
-from envs.nomad.sensors import BEARINGS, IR_MAX_CM, N_SONAR, SONAR_MAX_CM, SONAR_MIN_CM, counter_hash
+from twodrl_envs.nomad import sensors
+from twodrl_envs.nomad.geometry import MOVES_CM, ROBOT_RADIUS_CM, OfficeMap, swept_clearance
+from twodrl_envs.nomad.office import NomadOfficeEnv, route_code_at
+from twodrl_envs.nomad.sensors import BEARINGS, IR_MAX_CM, N_SONAR, SONAR_MAX_CM, SONAR_MIN_CM, counter_hash
 
 INCH_CM = 2.54
 _MOTION_SALT = np.uint64(0xD1B54A32D192ED03)

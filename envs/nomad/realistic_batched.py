@@ -1,9 +1,9 @@
 """N stand-in robots (``NomadOfficeReal-v0``) stepped in one numpy call.
 
-:class:`BatchedNomadOfficeReal` is :class:`~envs.nomad.batched.BatchedNomadOffice` with the
-realistic model of :mod:`envs.nomad.realistic`: continuous true poses, dead-reckoned odometry,
-readings of :meth:`~envs.nomad.realistic.Scene.ranges`. All per-step randomness is counter-based,
-so sub-env ``i`` reset with seed ``s`` equals ``gym.make("envs:NomadOfficeReal-v0")`` reset with
+:class:`BatchedNomadOfficeReal` is :class:`~twodrl_envs.nomad.batched.BatchedNomadOffice` with the
+realistic model of :mod:`twodrl_envs.nomad.realistic`: continuous true poses, dead-reckoned odometry,
+readings of :meth:`~twodrl_envs.nomad.realistic.Scene.ranges`. All per-step randomness is counter-based,
+so sub-env ``i`` reset with seed ``s`` equals ``gym.make("twodrl_envs:NomadOfficeReal-v0")`` reset with
 seed ``s`` and reset again after every episode.
 """
 
@@ -13,11 +13,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-from envs import MAX_EPISODE_STEPS
-from envs.nomad.batched import BatchedNomadOffice, SB3VecEnvAdapter, make_sb3_vec_env
-from envs.nomad.office import check_observation
-from envs.nomad.realistic import RealisticModel
+from twodrl_envs import MAX_EPISODE_STEPS
+from twodrl_envs.nomad.batched import BatchedNomadOffice, SB3VecEnvAdapter, make_sb3_vec_env
+from twodrl_envs.nomad.office import check_observation
+from twodrl_envs.nomad.realistic import RealisticModel
 
 
 class BatchedNomadOfficeReal(BatchedNomadOffice):

@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
-
-from envs.nomad import sensors
-from envs.nomad.geometry import ROBOT_RADIUS_CM, OfficeMap, point_segment_distance
+from twodrl_envs.nomad import sensors
+from twodrl_envs.nomad.geometry import ROBOT_RADIUS_CM, OfficeMap, point_segment_distance
 
 _WHITE = (255, 255, 255)
 _REGION_COLOURS = {"shortcut": (255, 224, 178), "detour": (200, 225, 255), "goal": (190, 240, 190)}

@@ -22,8 +22,7 @@ from functools import cache, cached_property
 from statistics import NormalDist
 
 import numpy as np
-
-from envs.nomad.geometry import ROBOT_RADIUS_CM, OfficeMap, cone_ranges
+from twodrl_envs.nomad.geometry import ROBOT_RADIUS_CM, OfficeMap, cone_ranges
 
 N_SONAR = 16
 N_IR = 16
