@@ -35,7 +35,7 @@ NOMAD_ENVS = {
     "NomadOffice": ("twodrl_envs.nomad.office:NomadOfficeEnv", "twodrl_envs.nomad.batched:BatchedNomadOffice"),
     "NomadOfficeReal": (
         "twodrl_envs.nomad.realistic:NomadOfficeRealEnv",
-        "twodrl_envs.nomad.realistic_batched:BatchedNomadOfficeReal",
+        "twodrl_envs.nomad.realistic:BatchedNomadOfficeReal",
     ),
     "NomadOfficeMemorable": (
         "twodrl_envs.memorable.env:NomadOfficeMemorableEnv",

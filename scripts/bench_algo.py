@@ -24,7 +24,6 @@ from collections.abc import Iterator
 
 import numpy as np
 import torch as th
-import twodrl_envs  # noqa: F401  (registers the Nomad office ids)
 from stable_baselines3 import A2C, PPO
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.env_util import make_vec_env
@@ -35,6 +34,7 @@ from stable_baselines3.common.vec_env.base_vec_env import VecEnvStepReturn
 import sb3_twodrl.common.fast as fast
 import sb3_twodrl.common.on_policy as on_policy
 import sb3_twodrl.common.policies as policies
+import twodrl_envs  # noqa: F401  (registers the Nomad office ids)
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
 from twodrl_bench.baselines import BatchedA2C, BatchedPPO
 from twodrl_bench.vec_env import make_train_env

@@ -22,6 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this checkout's 
 
 import gymnasium as gym
 import numpy as np
+
 import twodrl_envs  # noqa: F401  (registers the IDs)
 from twodrl_envs.nomad.batched import BatchedNomadOffice
 

@@ -27,8 +27,8 @@ sys.path.insert(0, str(ROOT))  # run from a checkout without installing
 
 import gymnasium as gym  # noqa: E402
 import torch as th  # noqa: E402
-import twodrl_envs  # noqa: E402, F401  (registers the IDs)
 
+import twodrl_envs  # noqa: E402, F401  (registers the IDs)
 from sb3_twodrl.hyperparams import hyperparams_path  # noqa: E402
 from twodrl_bench import PRESETS, RunSpec, load_hyperparams, run_pair  # noqa: E402
 

@@ -17,8 +17,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a checkout without installing
 
 from twodrl_envs import MAX_EPISODE_STEPS
+from twodrl_envs.nomad.core import office_core
 from twodrl_envs.nomad.dilemma import goal_probabilities, measure, properties, wall_avoiding_policy
-from twodrl_envs.nomad.office import office_core
 
 
 def main(argv: list[str] | None = None) -> dict[str, dict[str, float]]:

@@ -19,10 +19,11 @@ import numpy as np
 import torch as th
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.env_util import make_vec_env
-from twodrl_envs.nomad.batched import make_sb3_vec_env
 
+import twodrl_envs  # noqa: F401  (registers the IDs)
 from twodrl_bench.variants import INTEREST_MODES, PREFERENCE_MODES
 from twodrl_bench.variants import VariantTwoDimA2C as TwoDimA2C  # the interest modes are variants
+from twodrl_bench.vec_env import make_train_env
 
 
 class Scales(BaseCallback):
@@ -81,7 +82,7 @@ def main() -> None:
     th.set_num_threads(1)
     modes = dict(interest=args.interest, preferences=args.preferences, seed=args.seed)
     if args.env == "NomadOffice-v0":
-        env = make_sb3_vec_env(16, seed=args.seed)
+        env = make_train_env("NomadOffice-v0", 16, args.seed)
         model = TwoDimA2C("MlpPolicy", env, gamma=0.9, punishment_gamma=0.1, reward_split="info", **modes)
     else:
         model = TwoDimA2C("MlpPolicy", make_vec_env(args.env, n_envs=8, seed=args.seed), **modes)

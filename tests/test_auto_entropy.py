@@ -250,7 +250,6 @@ def test_the_coefficients_course_is_kept_per_tenth_of_the_budget_and_saved(algo,
 def test_an_epoch_runs_rows_carry_the_coefficient_of_a_learned_one_only(tmp_path) -> None:
     """The paper's epochs (no set budget): each row holds the last update's alpha and entropy fraction."""
     import twodrl_envs  # noqa: F401  (registers the IDs)
-
     from twodrl_bench import RunSpec, run_pair
 
     hp = {"n_envs": 4, "gamma": 0.9, "n_steps": 5}

@@ -19,7 +19,6 @@ pytest.importorskip("rl_zoo3")
 pytest.importorskip("scipy")
 
 import twodrl_envs  # noqa: F401  (registers the IDs)
-
 from sb3_twodrl.common.splitting import split_info
 from twodrl_bench.reports.benchmark import report, verdict
 from twodrl_bench.timesteps import resolve_arm, run_job

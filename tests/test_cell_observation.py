@@ -3,13 +3,13 @@
 import gymnasium as gym
 import numpy as np
 import pytest
-import twodrl_envs  # noqa: F401  (registers the IDs)
 from stable_baselines3.common.env_checker import check_env
+
+import twodrl_envs  # noqa: F401  (registers the IDs)
+from tests.test_nomad_batched import assert_batched_equals_singles
 from twodrl_envs.memorable.env import BatchedNomadOfficeMemorable
 from twodrl_envs.nomad.batched import BatchedNomadOffice
-from twodrl_envs.nomad.office import office_core
-
-from tests.test_nomad_batched import assert_batched_equals_singles
+from twodrl_envs.nomad.core import office_core
 
 LATTICE_IDS = ("NomadOffice-v0", "NomadOfficeMemorable-v0")
 

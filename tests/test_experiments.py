@@ -11,9 +11,9 @@ from dataclasses import replace
 import gymnasium as gym
 import numpy as np
 import pytest
-import twodrl_envs  # noqa: F401  (registers the IDs)
 from gymnasium.vector import AutoresetMode, SyncVectorEnv
 
+import twodrl_envs  # noqa: F401  (registers the IDs)
 from sb3_twodrl import TwoDimA2C
 from twodrl_bench import RunSpec, VectorEnvAdapter, algo_class, make_train_env, run_pair
 from twodrl_bench import epochs as runner_module

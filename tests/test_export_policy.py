@@ -8,9 +8,9 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch as th
-import twodrl_envs  # noqa: F401
 from stable_baselines3 import A2C
 
+import twodrl_envs  # noqa: F401
 from sb3_twodrl import TwoDimA2C
 from sb3_twodrl.export import export_onnx, export_policy, main
 

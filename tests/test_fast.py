@@ -4,13 +4,13 @@ it, and the bench's stock arms on it against stock SB3, learn the same parameter
 import numpy as np
 import pytest
 import torch as th
-import twodrl_envs  # noqa: F401  (registers the Nomad ids)
 from stable_baselines3 import A2C, PPO
 from stable_baselines3.common.utils import explained_variance
 
 import sb3_twodrl.common.fast as fast
 import sb3_twodrl.common.on_policy as on_policy
 import sb3_twodrl.common.policies as policies
+import twodrl_envs  # noqa: F401  (registers the Nomad ids)
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
 from sb3_twodrl.callbacks import EpisodeTracker
 from sb3_twodrl.common.infos import BatchInfos

@@ -6,15 +6,14 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import pytest
-import twodrl_envs  # noqa: F401  (registers the IDs)
-from twodrl_envs.memorable.cli import main as record_main
-from twodrl_envs.nomad.batched import make_sb3_vec_env
-from twodrl_envs.nomad.dilemma import measure
-from twodrl_envs.nomad.geometry import SHIPPED_MAPS, load_map
-from twodrl_envs.nomad.office import office_core
 
+import twodrl_envs  # noqa: F401  (registers the IDs)
 from sb3_twodrl.callbacks import EpisodeTracker, summarize_episodes
 from twodrl_bench.vec_env import make_train_env
+from twodrl_envs.memorable.cli import main as record_main
+from twodrl_envs.nomad.core import office_core
+from twodrl_envs.nomad.dilemma import measure
+from twodrl_envs.nomad.geometry import SHIPPED_MAPS, load_map
 
 VEC = {"num_envs": 2, "vectorization_mode": "vector_entry_point"}
 
@@ -104,7 +103,7 @@ def test_goal_only_map_runs_without_route_metrics():
     assert terminated and info["is_success"] and reward == pytest.approx(4.99)
     memorable = gym.make("NomadOfficeMemorable-v0", map="corridor")  # its shipped database
     assert "route" not in memorable.reset(seed=0)[1] and "route" not in memorable.step(1)[4]
-    adapter = make_sb3_vec_env(2, seed=0, map="corridor")
+    adapter = make_train_env("NomadOffice-v0", 2, 0, env_kwargs={"map": "corridor"})
     adapter.reset()
     assert all("route" not in info for info in adapter.step(np.array([1, 1]))[3])
 

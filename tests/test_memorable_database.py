@@ -5,6 +5,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from twodrl_envs.memorable.database import (
     CSV_COLUMNS,
     SCHEMA_VERSION,
@@ -13,8 +14,8 @@ from twodrl_envs.memorable.database import (
     record_database,
     save_database,
 )
+from twodrl_envs.nomad.core import office_core
 from twodrl_envs.nomad.geometry import default_map_path
-from twodrl_envs.nomad.office import office_core
 from twodrl_envs.nomad.realistic import RealisticModel
 from twodrl_envs.nomad.sensors import HIGH_CM, LOW_CM, NoiseModel
 

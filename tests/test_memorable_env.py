@@ -4,12 +4,13 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
-from twodrl_envs import MAX_EPISODE_STEPS
-from twodrl_envs.memorable.database import SensorDatabase, record_database
-from twodrl_envs.memorable.env import BatchedNomadOfficeMemorable, NomadOfficeMemorableEnv, make_memorable_vec_env
-from twodrl_envs.nomad.office import office_core
 
 from tests.test_nomad_batched import assert_batched_equals_singles
+from twodrl_bench.vec_env import make_train_env
+from twodrl_envs import MAX_EPISODE_STEPS
+from twodrl_envs.memorable.database import SensorDatabase, record_database
+from twodrl_envs.memorable.env import BatchedNomadOfficeMemorable, NomadOfficeMemorableEnv
+from twodrl_envs.nomad.core import office_core
 
 
 @pytest.fixture(scope="module")
@@ -55,14 +56,14 @@ def test_ideal_k1_database_gives_exactly_the_ideal_observations(ideal_db):
 
 def test_observations_are_recorded_readings_of_the_cell():
     env = NomadOfficeMemorableEnv()
-    db = env.replay.database
+    db = env.robot.database
     core = env.core
     obs, _ = env.reset(seed=1)
     seen = set()
     rng = np.random.default_rng(1)
     for _ in range(300):
         cell = env._cell
-        rows = env.replay.readings[db.offsets[cell] : db.offsets[cell] + db.counts[cell]]
+        rows = env.robot.readings[db.offsets[cell] : db.offsets[cell] + db.counts[cell]]
         match = np.flatnonzero((rows == obs[:32]).all(axis=1))
         assert len(match) == 1
         seen.add((cell, int(match[0])))
@@ -110,7 +111,7 @@ def test_batched_matches_single_envs():
 
 
 def test_sb3_vec_env():
-    venv = make_memorable_vec_env(3, seed=0)
+    venv = make_train_env("NomadOfficeMemorable-v0", 3, 0, "batched")
     obs = venv.reset()
     assert obs.shape == (3, 34)
     obs, _, _, infos = venv.step(np.array([0, 1, 2]))

@@ -3,9 +3,11 @@
 import gymnasium as gym
 import numpy as np
 import pytest
-import twodrl_envs  # noqa: F401  (registers the IDs)
 from stable_baselines3.common.vec_env import VecMonitor
-from twodrl_envs.nomad.batched import BatchedNomadOffice, make_sb3_vec_env
+
+import twodrl_envs  # noqa: F401  (registers the IDs)
+from twodrl_bench.vec_env import VectorEnvAdapter
+from twodrl_envs.nomad.batched import BatchedNomadOffice
 
 N_ENVS, STEPS, SEED = 6, 150, 11
 
@@ -43,7 +45,9 @@ def test_batched_equals_single_envs(sensor_noise, odometry):
 
 
 def test_sb3_adapter_reports_terminal_observation_and_truncation():
-    venv = VecMonitor(make_sb3_vec_env(4, seed=0, max_episode_steps=5))
+    adapter = VectorEnvAdapter(BatchedNomadOffice(4, max_episode_steps=5))
+    adapter.seed(0)
+    venv = VecMonitor(adapter)
     obs = venv.reset()
     assert obs.shape == (4, 34) and obs.dtype == np.float32
     for t in range(5):

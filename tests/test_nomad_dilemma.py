@@ -6,8 +6,10 @@ The figures are exact (``twodrl_envs.nomad.dilemma``); one test checks them agai
 import gymnasium as gym
 import numpy as np
 import pytest
+
 from twodrl_envs import MAX_EPISODE_STEPS
 from twodrl_envs.nomad.batched import BatchedNomadOffice
+from twodrl_envs.nomad.core import office_core
 from twodrl_envs.nomad.dilemma import (
     GAMMA,
     eps_policy,
@@ -19,7 +21,6 @@ from twodrl_envs.nomad.dilemma import (
     route_length,
     wall_avoiding_policy,
 )
-from twodrl_envs.nomad.office import office_core
 
 EPS_GRID = np.array([0.1, 0.2, 0.25, 0.3, 0.35])
 

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
 from twodrl_envs import MAX_EPISODE_STEPS
 
 IDS = ["twodrl_envs:NomadOffice-v0", "twodrl_envs:NomadOfficeReal-v0"]

@@ -5,10 +5,11 @@ import json
 import gymnasium as gym
 import numpy as np
 import pytest
+
 import twodrl_envs  # noqa: F401
 from twodrl_envs.nomad import sensors
+from twodrl_envs.nomad.core import office_core
 from twodrl_envs.nomad.geometry import load_map
-from twodrl_envs.nomad.office import office_core
 from twodrl_envs.nomad.realistic import RealisticModel, Surface
 
 PLASTER = Surface("plaster", 0.9, 7.5, 1.0)
@@ -245,7 +246,7 @@ def test_real_env_rejects_a_model_of_the_wrong_type():
 
 
 def test_batched_real_env_equals_single_envs():
-    from twodrl_envs.nomad.realistic_batched import BatchedNomadOfficeReal
+    from twodrl_envs.nomad.realistic import BatchedNomadOfficeReal
 
     n, steps = 3, 260
     batched = BatchedNomadOfficeReal(n)
@@ -272,8 +273,9 @@ def test_batched_real_env_equals_single_envs():
 
 def test_batched_real_env_trains_with_sb3():
     from stable_baselines3 import A2C
-    from twodrl_envs.nomad.realistic_batched import make_real_vec_env
 
-    venv = make_real_vec_env(4, seed=0, observe_odometry=False)
+    from twodrl_bench.vec_env import make_train_env
+
+    venv = make_train_env("NomadOfficeReal-v0", 4, 0, "batched", env_kwargs={"observe_odometry": False})
     assert venv.observation_space.shape == (32,)
     A2C("MlpPolicy", venv, n_steps=5, seed=0, device="cpu").learn(40)

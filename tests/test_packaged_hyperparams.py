@@ -6,9 +6,9 @@ from pathlib import Path
 
 import gymnasium as gym
 import pytest
-import twodrl_envs  # noqa: F401  (registers the Nomad office ids)
 
 import sb3_twodrl
+import twodrl_envs  # noqa: F401  (registers the Nomad office ids)
 from sb3_twodrl.hyperparams import PACKAGED, hyperparams_path, load, read_entry
 from twodrl_bench import load_hyperparams, load_spec, resolve
 

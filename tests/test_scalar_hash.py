@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
-from twodrl_envs.nomad.office import counter_word, episode_key, episode_keys
+
+from twodrl_envs.nomad.core import counter_word, episode_key, episode_keys
 from twodrl_envs.nomad.sensors import counter_hash
 
 U64 = st.integers(0, 2**64 - 1)

@@ -15,15 +15,15 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch as th
-import twodrl_envs  # noqa: F401  (registers the IDs)
 from stable_baselines3 import A2C
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import DummyVecEnv
-from twodrl_envs.nomad.office import GOAL_REWARD
 
+import twodrl_envs  # noqa: F401  (registers the IDs)
 from tests.tabular_oracle import TabularActorCritic
 from twodrl_bench.variants import VariantTwoDimA2C
+from twodrl_envs.nomad.core import GOAL_REWARD
 
 N_STEPS = 1000
 TOLERANCE = 1e-6
@@ -43,7 +43,7 @@ class ExploringStarts(gym.Wrapper):
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Any, dict[str, Any]]:
         self.env.reset(seed=seed)
         base = self.env.unwrapped
-        cells = base.core.lattice.cells[np.flatnonzero(base._moves.max(axis=1) >= 0)]  # cells with a free move
+        cells = base.core.lattice.cells[np.flatnonzero(base.robot.moves.max(axis=1) >= 0)]  # cells with a free move
         return self.env.reset(options={"position": tuple(cells[base.np_random.integers(len(cells))])})
 
 

@@ -6,8 +6,8 @@ import json
 
 import gymnasium as gym
 import pytest
-import twodrl_envs  # noqa: F401  (registers the IDs)
 
+import twodrl_envs  # noqa: F401  (registers the IDs)
 from twodrl_bench.protocol import parse_env_kwargs
 from twodrl_bench.reports import find_parts, transfer
 from twodrl_bench.runner import run_study

@@ -9,10 +9,10 @@ from pathlib import Path
 
 import optuna
 import pytest
-import twodrl_envs  # noqa: F401  (registers the Nomad office ids)
 import yaml
 
 import tests.toy_nav  # noqa: F401  (registers ToyNav-v0)
+import twodrl_envs  # noqa: F401  (registers the Nomad office ids)
 from sb3_twodrl import cli, export
 from sb3_twodrl.hyperparams import hyperparams_path
 from sb3_twodrl.zoo import (

@@ -18,10 +18,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
 from twodrl_envs.memorable.recording import drive_and_record
 from twodrl_envs.nomad import sensors
+from twodrl_envs.nomad.core import OfficeCore, office_core
 from twodrl_envs.nomad.geometry import ROBOT_RADIUS_CM, SHIPPED_MAPS, STEP_CM, OfficeMap, map_source
-from twodrl_envs.nomad.office import OfficeCore, office_core
 from twodrl_envs.nomad.realistic import RealisticModel
 from twodrl_envs.nomad.sensors import HIGH_CM, LOW_CM
 

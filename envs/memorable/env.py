@@ -10,20 +10,27 @@ layout (``observation="cell"`` included) are those of ``NomadOffice-v0``.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
 import numpy as np
+
 from twodrl_envs import MAX_EPISODE_STEPS
 from twodrl_envs.memorable.database import SensorDatabase, load_database
 from twodrl_envs.nomad import sensors
-from twodrl_envs.nomad.batched import BatchedNomadOffice, SB3VecEnvAdapter, make_sb3_vec_env
-from twodrl_envs.nomad.office import NomadOfficeEnv, OfficeCore, counter_word
+from twodrl_envs.nomad.batched import BatchedNomadOffice
+from twodrl_envs.nomad.core import OfficeCore, Robot, counter_word, office_core
+from twodrl_envs.nomad.office import NomadOfficeEnv
 
 
-class _Replay:
-    """Per-map replay tables shared by the single and the batched env."""
+class ReplayRobot(Robot):
+    """A robot that replays a sensor database: on the lattice, moving only between recorded cells.
+
+    A move collides where the map's swept-disc test says so or where it would enter a cell without
+    recordings (the recorded free space); a reading is reading ``hash(key, step) mod count`` of the
+    cell's recordings.
+    """
 
     def __init__(self, core: OfficeCore, database: str | Path | SensorDatabase | None) -> None:
+        super().__init__(core)
         if isinstance(database, SensorDatabase):
             database.check_map(core)
             db = database
@@ -36,11 +43,20 @@ class _Replay:
         moves = core.lattice.moves.copy()
         moves[(moves >= 0) & (db.counts[np.maximum(moves, 0)] == 0)] = -1
         self.moves = moves
+        self._offsets, self._counts = self.offsets.tolist(), db.counts.tolist()
 
-    def draw(self, cells: np.ndarray, keys: np.ndarray, steps: np.ndarray) -> np.ndarray:
+    def cell_readings(self, cells: np.ndarray, keys: np.ndarray, steps: np.ndarray) -> np.ndarray:
         """Recorded readings ``(n, 32)`` of ``cells``: reading ``hash(key, step) mod count`` of each."""
         word = sensors.counter_hash(keys, steps)[:, 0]
         return self.readings[self.offsets[cells] + (word % self.counts[cells]).astype(np.int64)]
+
+    def cell_reading(self, cell: int, key: int, step: int) -> np.ndarray:
+        """:meth:`cell_readings` of one robot, in Python integers (a single env's step is mostly call overhead)."""
+        return self.readings[self._offsets[cell] + counter_word(key, step) % self._counts[cell]]
+
+    def check_start(self, xy: np.ndarray, cell: int) -> None:
+        if cell < 0 or self.database.counts[cell] == 0:
+            raise ValueError(f"options['position'] {tuple(float(v) for v in xy)} is not a recorded lattice cell")
 
 
 class NomadOfficeMemorableEnv(NomadOfficeEnv):
@@ -49,7 +65,7 @@ class NomadOfficeMemorableEnv(NomadOfficeEnv):
     ``database`` is a file written by :func:`twodrl_envs.memorable.database.save_database`, a loaded
     :class:`~twodrl_envs.memorable.database.SensorDatabase`, or ``None`` for the shipped one (realistic
     sensor model, K = 8); it must have been recorded in ``map``. Motion is on the lattice, so
-    ``options["position"]`` must be a recorded cell.
+    ``options["position"]`` must be a recorded cell. The robot is a :class:`ReplayRobot` (``env.robot``).
     """
 
     def __init__(
@@ -61,22 +77,8 @@ class NomadOfficeMemorableEnv(NomadOfficeEnv):
         render_mode: str | None = None,
         observation: str = "sensors",
     ) -> None:
-        super().__init__(map, observe_odometry=observe_odometry, render_mode=render_mode, observation=observation)
-        self.replay = _Replay(self.core, database)
-        self._moves = self.replay.moves
-        self._offsets, self._counts = self.replay.offsets.tolist(), self.replay.database.counts.tolist()
-
-    def _lattice_readings(self, cell: int) -> np.ndarray:
-        """:meth:`_Replay.draw` of one cell, in Python integers (a single env's step is mostly call overhead)."""
-        word = counter_word(int(self._key[0]), int(self._step[0]))
-        return self.replay.readings[self._offsets[cell] + word % self._counts[cell]]
-
-    def _check_position(self, position: object) -> np.ndarray:
-        xy = super()._check_position(position)
-        cell = self.core.lattice.index(xy)
-        if cell < 0 or self.replay.database.counts[cell] == 0:
-            raise ValueError(f"options['position'] {tuple(float(v) for v in xy)} is not a recorded lattice cell")
-        return xy
+        core = office_core(map)
+        self._setup(core, ReplayRobot(core, database), observe_odometry, render_mode, observation)
 
 
 class BatchedNomadOfficeMemorable(BatchedNomadOffice):
@@ -93,26 +95,6 @@ class BatchedNomadOfficeMemorable(BatchedNomadOffice):
         max_episode_steps: int = MAX_EPISODE_STEPS,
         observation: str = "sensors",
     ) -> None:
-        super().__init__(
-            num_envs,
-            map,
-            observe_odometry=observe_odometry,
-            render_mode=render_mode,
-            max_episode_steps=max_episode_steps,
-            observation=observation,
-        )
-        self.replay = _Replay(self.core, database)
-        self._moves = self.replay.moves
-
-    def _observe(self, rows: np.ndarray) -> np.ndarray:
-        if self.observation == "cell":
-            return super()._observe(rows)
-        cells = self._cell[rows]
-        obs = self._obs_table[cells]
-        obs[:, : sensors.N_READINGS] = self.replay.draw(cells, self._key[rows], self._t[rows])
-        return obs
-
-
-def make_memorable_vec_env(n_envs: int, seed: int | None = None, **kwargs: Any) -> SB3VecEnvAdapter:
-    """An SB3 ``VecEnv`` of ``n_envs`` batched ``NomadOfficeMemorable-v0`` robots."""
-    return make_sb3_vec_env(n_envs, seed, batch_class=BatchedNomadOfficeMemorable, **kwargs)
+        core = office_core(map)
+        robot = ReplayRobot(core, database)
+        self._setup(num_envs, core, robot, observe_odometry, render_mode, max_episode_steps, observation)

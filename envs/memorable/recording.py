@@ -13,8 +13,9 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+
+from twodrl_envs.nomad.core import OfficeCore
 from twodrl_envs.nomad.geometry import ROBOT_RADIUS_CM, swept_clearance
-from twodrl_envs.nomad.office import OfficeCore
 from twodrl_envs.nomad.realistic import RealisticModel
 from twodrl_envs.nomad.sensors import HIGH_CM, LOW_CM
 

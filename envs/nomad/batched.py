@@ -5,8 +5,9 @@ every option of ``NomadOffice-v0``: on the ideal lattice model, optionally with 
 or with ``observation="cell"``, and off it with ``step_sd_cm`` / ``slip_sd_cm`` move noise. Sub-env
 ``i`` reset with seed ``s`` behaves exactly like ``gym.make("twodrl_envs:NomadOffice-v0")`` reset with seed
 ``s`` and reset again after every episode (same observations, rewards, terminations, truncations and,
-with ``render_mode="rgb_array"``, frames). :class:`SB3VecEnvAdapter` exposes it to Stable-Baselines3
-as a ``VecEnv``.
+with ``render_mode="rgb_array"``, frames). The rules are :mod:`twodrl_envs.nomad.core`'s, as the single
+env's; the robot is a :class:`~twodrl_envs.nomad.core.Robot`. Stable-Baselines3 sees it through any
+adapter of a same-step-autoreset ``VectorEnv`` (the bench's ``twodrl_bench.vec_env.VectorEnvAdapter``).
 """
 
 from __future__ import annotations
@@ -16,22 +17,25 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from gymnasium import spaces
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
-from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvStepReturn
+
 from twodrl_envs import MAX_EPISODE_STEPS
-from twodrl_envs.nomad import sensors
-from twodrl_envs.nomad.geometry import MOVES_CM, ROBOT_RADIUS_CM, STEP_CM, swept_clearance
-from twodrl_envs.nomad.office import (
-    COLLISION_PUNISHMENT,
-    GOAL_REWARD,
-    MOVE_PUNISHMENT,
+from twodrl_envs.nomad.core import (
     ROUTES,
-    NomadOfficeEnv,
+    IdealRobot,
+    OfficeCore,
+    Robot,
+    continuous_move,
     episode_keys,
+    evaluations,
+    office_core,
     route_code_at,
 )
+from twodrl_envs.nomad.geometry import MOVES_CM
+from twodrl_envs.nomad.office import check_observation, non_negative, observation_space, sensor_noise_model
 from twodrl_envs.nomad.sensors import NoiseModel
 
 _ROUTE_NAMES = np.array(ROUTES, dtype=object)
@@ -66,51 +70,56 @@ class BatchedNomadOffice(VectorEnv):
         max_episode_steps: int = MAX_EPISODE_STEPS,
         observation: str = "sensors",
     ) -> None:
+        core = office_core(map)
+        noise = sensor_noise_model(sensor_noise)
+        robot = IdealRobot(core, noise, non_negative("step_sd_cm", step_sd_cm), non_negative("slip_sd_cm", slip_sd_cm))
+        self._setup(num_envs, core, robot, observe_odometry, render_mode, max_episode_steps, observation)
+
+    def _setup(
+        self,
+        num_envs: int,
+        core: OfficeCore,
+        robot: Robot,
+        observe_odometry: bool,
+        render_mode: str | None,
+        max_episode_steps: int,
+        observation: str,
+    ) -> None:
+        """Spaces and state of ``num_envs`` ``robot``s in ``core``'s office (every variant's constructor ends here)."""
         if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
             raise ValueError(f"num_envs must be a positive int, got {num_envs!r}")
         if isinstance(max_episode_steps, bool) or not isinstance(max_episode_steps, int) or max_episode_steps < 1:
             raise ValueError(f"max_episode_steps must be a positive int, got {max_episode_steps!r}")
-        template = NomadOfficeEnv(
-            map,
-            observe_odometry=observe_odometry,
-            sensor_noise=sensor_noise,
-            step_sd_cm=step_sd_cm,
-            slip_sd_cm=slip_sd_cm,
-            render_mode=render_mode,
-            observation=observation,
-        )
-        self.core, self.noise, self.observation = template.core, template.noise, template.observation
-        self.step_sd_cm, self.slip_sd_cm, self.render_mode = template.step_sd_cm, template.slip_sd_cm, render_mode
-        self._lattice = template._on_lattice_motion  # False: continuous poses (a subclass may set it so too)
+        if not isinstance(observe_odometry, bool):
+            raise TypeError(f"observe_odometry must be a bool, got {observe_odometry!r}")
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode must be None or one of {self.metadata['render_modes']}, got {render_mode!r}")
+        self.core, self.robot, self.render_mode = core, robot, render_mode
+        self.observation = check_observation(observation, robot.on_lattice, type(self).__name__)
+        self.observe_odometry = observe_odometry
         self.num_envs = int(num_envs)
         self.max_episode_steps = max_episode_steps
-        self.single_observation_space = template.observation_space
-        self.single_action_space = template.action_space
+        self.single_observation_space = observation_space(core, observation, observe_odometry)
+        self.single_action_space = spaces.Discrete(4)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
-        odometry = self.core.odometry(self.core.lattice.cells)
-        table = np.concatenate([self.core.readings, odometry], axis=1)
-        self._obs_table = np.ascontiguousarray(table[:, : sensors.N_READINGS + (2 if observe_odometry else 0)])
-        self._sd_table = None if self.noise is None else self.noise.sd(self.core.ranges)
-        self._moves = self.core.lattice.moves  # move outcomes; a replay subclass swaps in the recorded free space
-        self._step_reward = np.array([-MOVE_PUNISHMENT, GOAL_REWARD - MOVE_PUNISHMENT, -COLLISION_PUNISHMENT])
-        self._info_keys = tuple(k for k in _INFO_KEYS if k != "route" or self.core.office.has_routes)
+        self._info_keys = tuple(k for k in _INFO_KEYS if k != "route" or core.office.has_routes)
         self._all = np.ones(self.num_envs, dtype=bool)
         self._all.flags.writeable = False
-        self._cell = np.full(self.num_envs, self.core.start_cell)
+        self._cell = np.full(self.num_envs, core.start_cell)
         self._route = np.zeros(self.num_envs, dtype=np.int8)
         self._t = np.zeros(self.num_envs, dtype=np.int64)
         self._episode = np.zeros(self.num_envs, dtype=np.int64)
         self._base = np.zeros(self.num_envs, dtype=np.uint64)
         self._key = np.zeros(self.num_envs, dtype=np.uint64)
         # continuous poses (off the lattice): true position, dead-reckoned odometry
-        self._start = np.array(self.core.office.start, dtype=np.float64)
-        self._start_route = int(route_code_at(self.core.office, self._start))
+        self._start = np.array(core.office.start, dtype=np.float64)
+        self._start_route = int(route_code_at(core.office, self._start))
         self._pos = np.repeat(self._start[None], self.num_envs, axis=0)
         self._odo = self._pos.copy()
         self._rngs: list[np.random.Generator] = []
         self._trajectories: list[list[tuple[float, float]]] = [[] for _ in range(self.num_envs)]
-        self._renderer = None
+        self._renderer: Any = None
 
     def reset(
         self, *, seed: int | Sequence[int | None] | None = None, options: dict[str, Any] | None = None
@@ -149,38 +158,21 @@ class BatchedNomadOffice(VectorEnv):
 
     def _positions(self) -> np.ndarray:
         """Robot centres ``(N, 2)`` in cm: the lattice cells' or the continuous poses."""
-        return self.core.lattice.cells[self._cell] if self._lattice else self._pos
+        return self.core.lattice.cells[self._cell] if self.robot.on_lattice else self._pos
 
     def _observe(self, rows: np.ndarray) -> np.ndarray:
         if self.observation == "cell":
             return self._cell[rows]  # fancy indexing: a copy
-        if not self._lattice:
-            readings = self._pose_readings(self._pos[rows], self._key[rows], self._t[rows])
-            if not self.single_observation_space.shape[0] > sensors.N_READINGS:
-                return readings
-            return np.concatenate([readings, self.core.odometry(self._odo[rows])], axis=1)
-        cells = self._cell[rows]
-        obs = self._obs_table[cells]
-        if self.noise is not None:
-            ranges = self.noise.apply(self.core.ranges[cells], self._key[rows], self._t[rows], self._sd_table[cells])
-            obs[:, : sensors.N_READINGS] = sensors.normalise(ranges)
-        return obs
-
-    def _pose_readings(self, positions: np.ndarray, keys: np.ndarray, steps: np.ndarray) -> np.ndarray:
-        """Normalised readings ``(n, 32)`` at continuous poses: exact ranges plus the sensor noise."""
-        ranges = sensors.exact_ranges(self.core.office, positions)
-        if self.noise is not None:
-            ranges = self.noise.apply(ranges, keys, steps)
-        return sensors.normalise(ranges)
-
-    def _displacement(self, actions: np.ndarray) -> np.ndarray:
-        """True moves ``(N, 2)`` cm of ``actions``: the command plus ``step_sd_cm`` along, ``slip_sd_cm`` across."""
-        command = MOVES_CM[actions]
-        along = [rng.normal(0.0, self.step_sd_cm) if self.step_sd_cm else 0.0 for rng in self._rngs]
-        lateral = [rng.normal(0.0, self.slip_sd_cm) if self.slip_sd_cm else 0.0 for rng in self._rngs]
-        unit = command / STEP_CM
-        normal = np.stack([-unit[:, 1], unit[:, 0]], axis=1)
-        return command + np.array(along)[:, None] * unit + np.array(lateral)[:, None] * normal
+        if self.robot.on_lattice:
+            cells = self._cell[rows]
+            readings = self.robot.cell_readings(cells, self._key[rows], self._t[rows])
+            odometry = self.core.cell_odometry[cells]
+        else:
+            readings = self.robot.pose_readings(self._pos[rows], self._key[rows], self._t[rows])
+            odometry = self.core.odometry(self._odo[rows])
+        if not self.observe_odometry:
+            return readings  # fancy indexing or computed: a fresh array
+        return np.concatenate([readings, odometry], axis=1)
 
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """Move every robot (eq. 11-12 evaluations); finished robots restart in the same call."""
@@ -189,28 +181,24 @@ class BatchedNomadOffice(VectorEnv):
             raise ValueError(f"actions must be {self.num_envs} integers in 0..3, got {actions!r}")
         actions = actions.astype(np.intp)
         self._t += 1
-        if self._lattice:
-            nxt = self._moves[self._cell, actions]
-            collided = nxt < 0
-            self._cell = np.where(collided, self._cell, nxt)
-            code = self.core.route_code[self._cell]
-            goal = self.core.goal[self._cell] & ~collided
+        if self.robot.on_lattice:
+            outcomes, cells = self.robot.outcomes, self._cell
+            collided, goal = outcomes.collided[cells, actions], outcomes.goal[cells, actions]
+            code, rewards = outcomes.code[cells, actions], outcomes.reward[cells, actions]
+            punishment = outcomes.punishment[cells, actions]
+            self._cell = outcomes.next_cell[cells, actions]
         else:
-            office = self.core.office
-            target = self._pos + self._displacement(actions)
-            clear = swept_clearance(self._pos, target, office.walls) > ROBOT_RADIUS_CM
-            collided = ~(clear & office.inside_bounds(target))
+            shift = self.robot.displacement(actions, self._key, self._t, self._rngs)
+            target, collided, code, goal = continuous_move(self.core.office, self._pos, shift)
+            rewards, punishment = evaluations(collided, goal)
             moved = ~collided
             self._pos[moved] = target[moved]
             self._odo[moved] += MOVES_CM[actions[moved]]
-            code = route_code_at(office, self._pos)
-            goal = office.in_region("goal", self._pos) & moved
-        self._route = np.where(~collided & (code > 0), code, self._route).astype(np.int8)
-        rewards = self._step_reward[np.where(collided, 2, goal.astype(np.intp))]
+        self._route = np.where(code > 0, code, self._route).astype(np.int8)
         terminated = collided | goal
         truncated = (self._t >= self.max_episode_steps) & ~terminated
         obs = self._observe(self._all)
-        info = self._info(np.where(collided, COLLISION_PUNISHMENT, MOVE_PUNISHMENT), collided, goal)
+        info = self._info(punishment, collided, goal)
         if self.render_mode is not None:
             for trajectory, xy in zip(self._trajectories, self._positions(), strict=True):
                 trajectory.append(tuple(xy))
@@ -247,67 +235,3 @@ class BatchedNomadOffice(VectorEnv):
             self._renderer.frame(xy, trajectory)
             for xy, trajectory in zip(self._positions(), self._trajectories, strict=True)
         )
-
-
-class SB3VecEnvAdapter(VecEnv):
-    """Stable-Baselines3 ``VecEnv`` view of a :class:`BatchedNomadOffice` (per-env info dicts)."""
-
-    def __init__(self, batched: BatchedNomadOffice) -> None:
-        self.batched = batched
-        super().__init__(batched.num_envs, batched.single_observation_space, batched.single_action_space)
-        self._actions = np.zeros(batched.num_envs, dtype=np.int64)
-
-    def reset(self) -> np.ndarray:
-        seed = None if self._seeds[0] is None else self._seeds
-        obs, _ = self.batched.reset(seed=seed)
-        self._reset_seeds()
-        return obs
-
-    def step_async(self, actions: np.ndarray) -> None:
-        self._actions = np.asarray(actions).reshape(self.num_envs)
-
-    def step_wait(self) -> VecEnvStepReturn:
-        obs, rewards, terminated, truncated, info = self.batched.step(self._actions)
-        done = terminated | truncated
-        infos: list[dict[str, Any]] = [
-            {
-                "punishment": float(p),
-                "collision": bool(c),
-                "position_cm": (float(xy[0]), float(xy[1])),
-                "is_success": bool(g),
-            }
-            for p, c, xy, g in zip(
-                info["punishment"], info["collision"], info["position_cm"], info["is_success"], strict=True
-            )
-        ]
-        if "route" in info:  # maps with route regions
-            for entry, route in zip(infos, info["route"], strict=True):
-                entry["route"] = route
-        for i in np.flatnonzero(done):
-            infos[i]["terminal_observation"] = info["final_obs"][i]
-            infos[i]["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
-        return obs, rewards.astype(np.float32), done, infos
-
-    def close(self) -> None:
-        self.batched.close()
-
-    def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
-        return [getattr(self.batched, attr_name)] * len(self._get_indices(indices))
-
-    def set_attr(self, attr_name: str, value: Any, indices: Any = None) -> None:
-        setattr(self.batched, attr_name, value)
-
-    def env_method(self, method_name: str, *method_args: Any, indices: Any = None, **method_kwargs: Any) -> list[Any]:
-        raise NotImplementedError("BatchedNomadOffice has no per-env methods")
-
-    def env_is_wrapped(self, wrapper_class: type, indices: Any = None) -> list[bool]:
-        return [False] * len(self._get_indices(indices))
-
-
-def make_sb3_vec_env(
-    n_envs: int, seed: int | None = None, batch_class: type[BatchedNomadOffice] = BatchedNomadOffice, **kwargs: Any
-) -> SB3VecEnvAdapter:
-    """An SB3 ``VecEnv`` of ``n_envs`` batched ``NomadOffice-v0`` robots (kwargs go to ``batch_class``)."""
-    venv = SB3VecEnvAdapter(batch_class(n_envs, **kwargs))
-    venv.seed(seed)
-    return venv

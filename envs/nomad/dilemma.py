@@ -20,8 +20,9 @@ route's region, where its route has no path, is followed by the nearest way to t
 from __future__ import annotations
 
 import numpy as np
+
+from twodrl_envs.nomad.core import COLLISION_PUNISHMENT, GOAL_REWARD, MOVE_PUNISHMENT, OfficeCore
 from twodrl_envs.nomad.geometry import clearance
-from twodrl_envs.nomad.office import COLLISION_PUNISHMENT, GOAL_REWARD, MOVE_PUNISHMENT, OfficeCore
 
 GAMMA = 0.9  # the paper's reward discount (section 3.2)
 ROUTE_CODES = {"shortcut": 1, "detour": 2}

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
+
+from twodrl_envs.nomad.core import OfficeCore
 from twodrl_envs.nomad.geometry import MOVES_CM
-from twodrl_envs.nomad.office import OfficeCore
 from twodrl_envs.nomad.realistic import RealisticModel
 from twodrl_envs.nomad.sensors import HIGH_CM, LOW_CM
 

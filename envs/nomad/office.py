@@ -1,126 +1,39 @@
-"""The paper's navigation task (section 3.2, eq. 11-12) as a Gymnasium environment."""
+"""The paper's navigation task (section 3.2, eq. 11-12) as a Gymnasium environment: one robot.
+
+The rules (moves, collisions, evaluations, route codes, the goal) are :mod:`twodrl_envs.nomad.core`'s; the
+robot (motion and readings) is a :class:`~twodrl_envs.nomad.core.Robot`. This module holds one robot's
+episode state and the Gymnasium API; :mod:`twodrl_envs.nomad.batched` holds N robots' in arrays.
+"""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from functools import cache
 from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+
 from twodrl_envs.nomad import sensors
-from twodrl_envs.nomad.geometry import (
-    MOVES_CM,
-    ROBOT_RADIUS_CM,
-    Lattice,
-    OfficeMap,
-    build_lattice,
-    check_goal_reachable,
-    clearance,
-    load_map,
-    map_source,
-    swept_clearance,
+from twodrl_envs.nomad.core import (
+    ROUTES,
+    IdealRobot,
+    OfficeCore,
+    Robot,
+    continuous_move,
+    episode_key,
+    evaluations,
+    office_core,
+    route_code_at,
 )
+from twodrl_envs.nomad.geometry import MOVES_CM, ROBOT_RADIUS_CM, clearance
 from twodrl_envs.nomad.sensors import NoiseModel
 
-GOAL_REWARD = 5.0  # r_R, eq. 11
-COLLISION_PUNISHMENT = 1.0  # r_P on collision, eq. 12
-MOVE_PUNISHMENT = 0.01  # r_P for every (non-colliding) move, eq. 12
-ROUTES: tuple[str | None, ...] = (None, "shortcut", "detour")
 OBSERVATIONS = ("sensors", "cell")
-_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 
 
-@dataclass(frozen=True)
-class OfficeCore:
-    """Everything about an office that does not change during learning, computed once per map.
-
-    ``ranges`` ``(n_cells, 32)`` are the exact sensor ranges (cm) of every free lattice cell and
-    ``readings`` their normalised, saturated values; ``route_code`` (0 none, 1 shortcut, 2 detour)
-    and ``goal`` label cells. A sensor database (MEMORABLE) records noisy readings per cell with
-    :meth:`twodrl_envs.nomad.sensors.NoiseModel.sample` of ``ranges``.
-    """
-
-    office: OfficeMap
-    lattice: Lattice
-    ranges: np.ndarray
-    readings: np.ndarray
-    route_code: np.ndarray
-    goal: np.ndarray
-    start_cell: int
-
-    def odometry(self, xy: np.ndarray) -> np.ndarray:
-        """Position ``(..., 2)`` scaled by the map bounds to [0, 1] (float32)."""
-        x0, y0, x1, y1 = self.office.bounds
-        return np.clip((xy - (x0, y0)) / (x1 - x0, y1 - y0), 0.0, 1.0).astype(np.float32)
-
-
-def route_code_at(office: OfficeMap, xy: np.ndarray) -> np.ndarray:
-    """Passage code (0 none, 1 shortcut, 2 detour) of centre positions ``(..., 2)``."""
-    return np.where(office.in_region("shortcut", xy), 1, np.where(office.in_region("detour", xy), 2, 0))
-
-
-@cache
-def _core(source: str, mtime_ns: int) -> OfficeCore:
-    office = load_map(source)
-    lattice = build_lattice(office)
-    check_goal_reachable(office, lattice)
-    ranges = sensors.exact_ranges(office, lattice.cells)
-    return OfficeCore(
-        office,
-        lattice,
-        ranges,
-        sensors.normalise(ranges),
-        route_code_at(office, lattice.cells).astype(np.int8),
-        office.in_region("goal", lattice.cells),
-        lattice.index(office.start),
-    )
-
-
-def office_core(map_path: str | Path | None = None) -> OfficeCore:
-    """The (cached) :class:`OfficeCore` of a map file; ``None`` is the shipped office.
-
-    Every env loads its map here: the file is validated (:func:`~twodrl_envs.nomad.geometry.load_map`) and
-    its goal must be reachable from the start on the lattice
-    (:func:`~twodrl_envs.nomad.geometry.check_goal_reachable`), else ``ValueError``.
-    """
-    source = Path(map_source(map_path))
-    # A missing file gets its error from load_map, uncached
-    return _core(str(source), source.stat().st_mtime_ns if source.exists() else -1)
-
-
-def episode_keys(base: np.ndarray, episode: np.ndarray) -> np.ndarray:
-    """Noise key of each episode, derived from a seeded base key and the episode counter."""
-    return sensors.counter_hash(base + episode.astype(np.uint64) * _GOLDEN, np.zeros(len(base), dtype=np.int64))[
-        :, 0
-    ].copy()
-
-
-_MASK64 = (1 << 64) - 1
-
-
-def counter_word(key: int, step: int) -> int:
-    """Word 0 of :func:`twodrl_envs.nomad.sensors.counter_hash` of one ``(key, step)``, in Python integers.
-
-    A single env needs one word per reset or replayed reading; numpy's call overhead would cost more
-    than the hash.
-    """
-    x = (key + (step * 64 + 1) * int(_GOLDEN)) & _MASK64
-    x ^= x >> 30
-    x = (x * 0xBF58476D1CE4E5B9) & _MASK64
-    x ^= x >> 27
-    x = (x * 0x94D049BB133111EB) & _MASK64
-    return x ^ (x >> 31)
-
-
-def episode_key(base: int, episode: int) -> int:
-    """:func:`episode_keys` of one env, in Python integers."""
-    return counter_word((base + episode * int(_GOLDEN)) & _MASK64, 0)
-
-
-def _sensor_noise(value: object) -> NoiseModel | None:
+def sensor_noise_model(value: object) -> NoiseModel | None:
+    """The :class:`NoiseModel` of a ``sensor_noise`` option (``True``: the default model; ``None``/``False``: none)."""
     if value is None or value is False:
         return None
     if value is True:
@@ -145,10 +58,18 @@ def check_observation(observation: object, lattice: bool, env_name: str) -> str:
     return observation
 
 
-def _non_negative(name: str, value: object) -> float:
+def non_negative(name: str, value: object) -> float:
+    """``value`` as a float if it is a finite number >= 0, else ``ValueError`` naming ``name``."""
     if isinstance(value, bool) or not isinstance(value, int | float) or not np.isfinite(value) or value < 0:
         raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
     return float(value)
+
+
+def observation_space(core: OfficeCore, observation: str, observe_odometry: bool) -> spaces.Space:
+    """One robot's observation space: ``Discrete(n_cells)`` for ``"cell"``, else 32 readings (+ 2 odometry)."""
+    if observation == "cell":
+        return spaces.Discrete(len(core.lattice.cells))
+    return spaces.Box(0.0, 1.0, shape=(sensors.N_READINGS + (2 if observe_odometry else 0),), dtype=np.float32)
 
 
 class NomadOfficeEnv(gym.Env):
@@ -177,10 +98,8 @@ class NomadOfficeEnv(gym.Env):
     leaves the lattice and readings are ray cast at the true pose; odometry reports the
     dead-reckoned (commanded) position, as wheel odometry does.
 
-    Sensor-source seam (MEMORABLE): on the lattice, readings come only from
-    :meth:`_lattice_readings` and move outcomes only from ``self._moves`` (``(n_cells, 4)``, next
-    cell or -1 for a collision). A replay subclass overrides the method to return one of K
-    recorded readings of the cell and swaps ``self._moves`` for the recorded free space.
+    The robot is :attr:`robot` (:class:`~twodrl_envs.nomad.core.Robot`): the realistic and replay envs
+    are this env with another robot.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
@@ -196,58 +115,52 @@ class NomadOfficeEnv(gym.Env):
         render_mode: str | None = None,
         observation: str = "sensors",
     ) -> None:
+        core = office_core(map)
+        noise = sensor_noise_model(sensor_noise)
+        robot = IdealRobot(core, noise, non_negative("step_sd_cm", step_sd_cm), non_negative("slip_sd_cm", slip_sd_cm))
+        self._setup(core, robot, observe_odometry, render_mode, observation)
+
+    def _setup(
+        self, core: OfficeCore, robot: Robot, observe_odometry: bool, render_mode: str | None, observation: str
+    ) -> None:
+        """Spaces and state of an env of ``robot`` in ``core``'s office (every variant's constructor ends here)."""
         if not isinstance(observe_odometry, bool):
             raise TypeError(f"observe_odometry must be a bool, got {observe_odometry!r}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None or one of {self.metadata['render_modes']}, got {render_mode!r}")
-        self.core = office_core(map)
-        self.noise = _sensor_noise(sensor_noise)
-        self.step_sd_cm = _non_negative("step_sd_cm", step_sd_cm)
-        self.slip_sd_cm = _non_negative("slip_sd_cm", slip_sd_cm)
-        self.observation = check_observation(observation, self._on_lattice_motion, type(self).__name__)
+        self.core, self.robot = core, robot
+        self.observation = check_observation(observation, robot.on_lattice, type(self).__name__)
         self.observe_odometry = observe_odometry
         self.render_mode = render_mode
-        self._moves = self.core.lattice.moves
-        self._cell_odometry = self.core.odometry(self.core.lattice.cells)  # on the lattice, odometry is the cell's
-        if self.observation == "cell":
-            self.observation_space: spaces.Space = spaces.Discrete(len(self.core.lattice.cells))
-        else:
-            dim = sensors.N_READINGS + (2 if observe_odometry else 0)
-            self.observation_space = spaces.Box(0.0, 1.0, shape=(dim,), dtype=np.float32)
+        self.observation_space = observation_space(core, observation, observe_odometry)
         self.action_space = spaces.Discrete(4)
-        self._base_key = np.zeros(1, dtype=np.uint64)
+        self._outcomes = robot.outcomes.rows if robot.on_lattice else []
+        self._base_key = 0
         self._episode = -1
-        self._key = np.zeros(1, dtype=np.uint64)
-        self._step = np.zeros(1, dtype=np.int64)
-        self._cell = self.core.start_cell
-        self._pos = np.array(self.core.office.start, dtype=np.float64)
+        self._key = 0
+        self._step = 0
+        self._cell = core.start_cell
+        self._pos = np.array(core.office.start, dtype=np.float64)
         self._odo = self._pos.copy()
         self._route = 0
         self._start: tuple[np.ndarray, int, int] | None = None
         self._trajectory: list[tuple[float, float]] = []
-        self._renderer = None
+        self._renderer: Any = None
 
-    # --- readings -------------------------------------------------------------------------
-    def _lattice_readings(self, cell: int) -> np.ndarray:
-        """Normalised readings ``(32,)`` at a lattice cell: table look-up plus per-step noise."""
-        if self.noise is None:
-            return self.core.readings[cell]
-        return sensors.normalise(self.noise.apply(self.core.ranges[cell : cell + 1], self._key, self._step))[0]
-
-    def _pose_readings(self, xy: np.ndarray) -> np.ndarray:
-        """Normalised readings ``(32,)`` at an arbitrary pose (ray cast)."""
-        ranges = sensors.exact_ranges(self.core.office, xy[None])
-        if self.noise is not None:
-            ranges = self.noise.apply(ranges, self._key, self._step)
-        return sensors.normalise(ranges)[0]
+    def _counters(self) -> tuple[np.ndarray, np.ndarray]:
+        return np.array([self._key], dtype=np.uint64), np.array([self._step], dtype=np.int64)
 
     def _observation(self) -> np.ndarray | int:
         if self.observation == "cell":
             return self._cell
-        readings = self._lattice_readings(self._cell) if self._cell >= 0 else self._pose_readings(self._pos)
+        if self._cell >= 0:
+            readings = self.robot.cell_reading(self._cell, self._key, self._step)
+            odometry = self.core.cell_odometry[self._cell]
+        else:
+            readings = self.robot.pose_readings(self._pos[None], *self._counters())[0]
+            odometry = self.core.odometry(self._odo)
         if not self.observe_odometry:
             return readings.copy()
-        odometry = self._cell_odometry[self._cell] if self._cell >= 0 else self.core.odometry(self._odo)
         return np.concatenate([readings, odometry])
 
     # --- gymnasium API --------------------------------------------------------------------
@@ -257,11 +170,11 @@ class NomadOfficeEnv(gym.Env):
         """Start an episode at the map's start, or at ``options["position"] = (x_cm, y_cm)``."""
         super().reset(seed=seed)
         if seed is not None or self._episode < 0:
-            self._base_key = self.np_random.integers(0, 2**63, size=1, dtype=np.uint64)
+            self._base_key = int(self.np_random.integers(0, 2**63, size=1, dtype=np.uint64)[0])
             self._episode = -1
         self._episode += 1
-        self._key[0] = episode_key(int(self._base_key[0]), self._episode)
-        self._step[0] = 0
+        self._key = episode_key(self._base_key, self._episode)
+        self._step = 0
         options = {} if options is None else options
         if not isinstance(options, dict) or set(options) - {"position"}:
             raise ValueError(f"options may only contain 'position', got {options!r}")
@@ -276,16 +189,13 @@ class NomadOfficeEnv(gym.Env):
         return self._observation(), self._info(False, 0.0)
 
     def _start_state(self, position: object) -> tuple[np.ndarray, int, int]:
-        """Checked position, lattice cell (-1 off the lattice or with noisy motion) and route code of a start."""
+        """Checked position, lattice cell (-1 off the lattice) and route code of a start."""
         pos = self._check_position(position)
-        cell = self.core.lattice.index(pos) if self._on_lattice_motion else -1
+        cell = self.core.lattice.index(pos) if self.robot.on_lattice else -1
+        self.robot.check_start(pos, cell)
         if cell < 0 and self.observation == "cell":
             raise ValueError(f"options['position'] {tuple(pos)} is not a lattice cell, which observation='cell' needs")
         return pos, cell, int(route_code_at(self.core.office, pos))
-
-    @property
-    def _on_lattice_motion(self) -> bool:
-        return self.step_sd_cm == 0.0 and self.slip_sd_cm == 0.0
 
     def _check_position(self, position: object) -> np.ndarray:
         try:
@@ -309,46 +219,26 @@ class NomadOfficeEnv(gym.Env):
         a = int(action)
         if not 0 <= a < 4:
             raise ValueError(f"action must be 0 (N), 1 (E), 2 (S) or 3 (W), got {action!r}")
-        self._step[0] += 1
+        self._step += 1
         if self._cell >= 0:
-            nxt = int(self._moves[self._cell, a])
-            collided = nxt < 0
+            self._cell, collided, goal, code, reward, punishment = self._outcomes[self._cell][a]
             if not collided:
-                self._cell = nxt
-                self._pos = self.core.lattice.cells[nxt]
-                self._odo = self._pos
-                code = int(self.core.route_code[nxt])
-                goal = bool(self.core.goal[nxt])
+                self._pos = self._odo = self.core.lattice.cells[self._cell]
         else:
-            collided, code, goal = self._continuous_move(a)
-        if collided:
-            punishment, goal = COLLISION_PUNISHMENT, False
-        else:
-            punishment = MOVE_PUNISHMENT
-            if code:
-                self._route = code
+            actions = np.array([a])
+            shift = self.robot.displacement(actions, *self._counters(), [self.np_random])
+            target, hit, codes, goals = continuous_move(self.core.office, self._pos[None], shift)
+            rewards, punishments = evaluations(hit, goals)
+            collided, goal, code = bool(hit[0]), bool(goals[0]), int(codes[0])
+            reward, punishment = float(rewards[0]), float(punishments[0])
+            if not collided:
+                self._pos = target[0]
+                self._odo = self._odo + MOVES_CM[a]
+        if code:
+            self._route = code
         if self.render_mode is not None:
             self._trajectory.append(tuple(self._pos))
-        reward = (GOAL_REWARD if goal else 0.0) - punishment
         return self._observation(), reward, collided or goal, False, self._info(goal, punishment, collided)
-
-    def _continuous_move(self, action: int) -> tuple[bool, int, bool]:
-        command = MOVES_CM[action]
-        move = command
-        if not self._on_lattice_motion:
-            along = self.np_random.normal(0.0, self.step_sd_cm) if self.step_sd_cm else 0.0
-            lateral = self.np_random.normal(0.0, self.slip_sd_cm) if self.slip_sd_cm else 0.0
-            unit = command / np.linalg.norm(command)
-            move = command + along * unit + lateral * np.array([-unit[1], unit[0]])
-        target = self._pos + move
-        office = self.core.office
-        if swept_clearance(self._pos[None], target[None], office.walls)[0] <= ROBOT_RADIUS_CM or not bool(
-            office.inside_bounds(target)
-        ):
-            return True, 0, False
-        self._pos = target
-        self._odo = self._odo + command
-        return False, int(route_code_at(office, target)), bool(office.in_region("goal", target))
 
     def _info(self, goal: bool, punishment: float, collided: bool = False) -> dict[str, Any]:
         info = {

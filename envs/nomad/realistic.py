@@ -33,9 +33,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from twodrl_envs import MAX_EPISODE_STEPS
 from twodrl_envs.nomad import sensors
-from twodrl_envs.nomad.geometry import MOVES_CM, ROBOT_RADIUS_CM, OfficeMap, swept_clearance
-from twodrl_envs.nomad.office import NomadOfficeEnv, route_code_at
+from twodrl_envs.nomad.batched import BatchedNomadOffice
+from twodrl_envs.nomad.core import OfficeCore, Robot, office_core
+from twodrl_envs.nomad.geometry import MOVES_CM, ROBOT_RADIUS_CM, OfficeMap
+from twodrl_envs.nomad.office import NomadOfficeEnv
 from twodrl_envs.nomad.sensors import BEARINGS, IR_MAX_CM, N_SONAR, SONAR_MAX_CM, SONAR_MIN_CM, counter_hash
 
 INCH_CM = 2.54
@@ -369,6 +373,28 @@ class Scene:
         return sensors.normalise(self.ranges(positions, keys, steps))
 
 
+class RealisticRobot(Robot):
+    """The stand-in robot of a :class:`RealisticModel`: always off the lattice; readings of :meth:`Scene.readings`
+    at the true pose; moves of :meth:`RealisticModel.displacement` (counter-based, no generator)."""
+
+    on_lattice = False
+
+    def __init__(self, core: OfficeCore, model: RealisticModel | None) -> None:
+        if model is not None and not isinstance(model, RealisticModel):
+            raise TypeError(f"model must be a RealisticModel or None, got {type(model).__name__}: {model!r}")
+        super().__init__(core)
+        self.model = RealisticModel() if model is None else model
+        self.scene = self.model.scene(core.office)
+
+    def pose_readings(self, positions: np.ndarray, keys: np.ndarray, steps: np.ndarray) -> np.ndarray:
+        return self.scene.readings(positions, keys, steps)
+
+    def displacement(
+        self, actions: np.ndarray, keys: np.ndarray, steps: np.ndarray, rngs: list[np.random.Generator]
+    ) -> np.ndarray:
+        return self.model.displacement(actions, keys, steps)
+
+
 class NomadOfficeRealEnv(NomadOfficeEnv):
     """``NomadOfficeReal-v0``: the office task on the stand-in robot of :class:`RealisticModel`.
 
@@ -376,6 +402,7 @@ class NomadOfficeRealEnv(NomadOfficeEnv):
     :meth:`RealisticModel.displacement` and collide by the swept-disc test at the true pose; the
     odometry in the observation is dead reckoning (start plus the commanded moves that did not
     collide). Evaluations, ``info`` keys and the observation layout are those of ``NomadOffice-v0``.
+    The robot is a :class:`RealisticRobot` (``env.robot``).
     """
 
     def __init__(
@@ -387,26 +414,28 @@ class NomadOfficeRealEnv(NomadOfficeEnv):
         render_mode: str | None = None,
         observation: str = "sensors",
     ) -> None:
-        if model is not None and not isinstance(model, RealisticModel):
-            raise TypeError(f"model must be a RealisticModel or None, got {type(model).__name__}: {model!r}")
-        super().__init__(map, observe_odometry=observe_odometry, render_mode=render_mode, observation=observation)
-        self.model = RealisticModel() if model is None else model
-        self.scene = self.model.scene(self.core.office)
+        core = office_core(map)
+        self._setup(core, RealisticRobot(core, model), observe_odometry, render_mode, observation)
 
-    @property
-    def _on_lattice_motion(self) -> bool:
-        return False
 
-    def _pose_readings(self, xy: np.ndarray) -> np.ndarray:
-        return self.scene.readings(xy[None], self._key, self._step)[0]
+class BatchedNomadOfficeReal(BatchedNomadOffice):
+    """``num_envs`` stand-in robots: ``info["position_cm"]`` is the true pose, the odometry is dead reckoning.
 
-    def _continuous_move(self, action: int) -> tuple[bool, int, bool]:
-        target = self._pos + self.model.displacement(np.array([action]), self._key, self._step)[0]
-        office = self.core.office
-        if swept_clearance(self._pos[None], target[None], office.walls)[0] <= ROBOT_RADIUS_CM or not bool(
-            office.inside_bounds(target)
-        ):
-            return True, 0, False
-        self._pos = target
-        self._odo = self._odo + MOVES_CM[action]
-        return False, int(route_code_at(office, target)), bool(office.in_region("goal", target))
+    All per-step randomness is counter-based, so sub-env ``i`` reset with seed ``s`` equals
+    ``gym.make("twodrl_envs:NomadOfficeReal-v0")`` reset with seed ``s`` and reset again after every episode.
+    """
+
+    def __init__(
+        self,
+        num_envs: int,
+        map: str | Path | None = None,
+        *,
+        model: RealisticModel | None = None,
+        observe_odometry: bool = True,
+        render_mode: str | None = None,
+        max_episode_steps: int = MAX_EPISODE_STEPS,
+        observation: str = "sensors",
+    ) -> None:
+        core = office_core(map)
+        robot = RealisticRobot(core, model)
+        self._setup(num_envs, core, robot, observe_odometry, render_mode, max_episode_steps, observation)

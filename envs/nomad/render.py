@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+
 from twodrl_envs.nomad import sensors
 from twodrl_envs.nomad.geometry import ROBOT_RADIUS_CM, OfficeMap, point_segment_distance
 

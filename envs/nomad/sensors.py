@@ -22,6 +22,7 @@ from functools import cache, cached_property
 from statistics import NormalDist
 
 import numpy as np
+
 from twodrl_envs.nomad.geometry import ROBOT_RADIUS_CM, OfficeMap, cone_ranges
 
 N_SONAR = 16
