@@ -1,6 +1,6 @@
 """Measure the office's dilemma (properties P1-P5, docs/nomad.md) exactly, before any learning, on one or more maps.
 
-Prints, side by side for each map, the figures of :func:`twodrl_envs.nomad.dilemma.measure` (exact
+Prints, side by side for each map, the figures of :func:`twodrl_envs.analysis.dilemma.measure` (exact
 expectations on the lattice, no sampling) and whether properties P1-P5 hold; ``--limits`` adds the
 wall-avoiding walks' goal rates by route for other time limits. Takes a few seconds.
 
@@ -17,8 +17,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a checkout without installing
 
 from twodrl_envs import MAX_EPISODE_STEPS
+from twodrl_envs.analysis.dilemma import goal_probabilities, measure, properties, wall_avoiding_policy
 from twodrl_envs.nomad.core import office_core
-from twodrl_envs.nomad.dilemma import goal_probabilities, measure, properties, wall_avoiding_policy
 
 
 def main(argv: list[str] | None = None) -> dict[str, dict[str, float]]:

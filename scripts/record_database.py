@@ -1,5 +1,5 @@
-"""Same as the installed ``sb3-twodrl-record-database`` (:mod:`twodrl_envs.memorable.cli`)."""
+"""Same as the installed ``sb3-twodrl-record-database`` (:mod:`twodrl_envs.analysis.cli`)."""
 
-from twodrl_envs.memorable.cli import main
+from twodrl_envs.analysis.cli import main
 
 main()

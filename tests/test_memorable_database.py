@@ -6,12 +6,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from twodrl_envs.analysis.recording import record_database
 from twodrl_envs.memorable.database import (
     CSV_COLUMNS,
     SCHEMA_VERSION,
     import_csv,
     load_database,
-    record_database,
     save_database,
 )
 from twodrl_envs.nomad.core import office_core

@@ -1,6 +1,6 @@
 """The default office poses the paper's dilemma (properties P1-P5, docs/nomad.md) before any learning.
 
-The figures are exact (``twodrl_envs.nomad.dilemma``); one test checks them against walks of the batched env.
+The figures are exact (``twodrl_envs.analysis.dilemma``); one test checks them against walks of the batched env.
 """
 
 import gymnasium as gym
@@ -8,9 +8,7 @@ import numpy as np
 import pytest
 
 from twodrl_envs import MAX_EPISODE_STEPS
-from twodrl_envs.nomad.batched import BatchedNomadOffice
-from twodrl_envs.nomad.core import office_core
-from twodrl_envs.nomad.dilemma import (
+from twodrl_envs.analysis.dilemma import (
     GAMMA,
     eps_policy,
     expected_return,
@@ -21,6 +19,8 @@ from twodrl_envs.nomad.dilemma import (
     route_length,
     wall_avoiding_policy,
 )
+from twodrl_envs.nomad.batched import BatchedNomadOffice
+from twodrl_envs.nomad.core import office_core
 
 EPS_GRID = np.array([0.1, 0.2, 0.25, 0.3, 0.35])
 

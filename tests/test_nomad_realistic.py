@@ -157,7 +157,7 @@ def test_real_env_odometry_is_dead_reckoning_and_drifts(tmp_path):
 
 
 def test_gap_is_systematic_and_straight_runs_drift_more():
-    from twodrl_envs.nomad.gap import odometry_errors, systematic_difference
+    from twodrl_envs.analysis.gap import odometry_errors, systematic_difference
 
     core = office_core()
     diff = systematic_difference(core, RealisticModel(), draws=3, seed=0)

@@ -13,17 +13,15 @@ import csv
 import datetime as _dt
 import hashlib
 import json
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from twodrl_envs.memorable.recording import drive_and_record
 from twodrl_envs.nomad import sensors
 from twodrl_envs.nomad.core import OfficeCore, office_core
 from twodrl_envs.nomad.geometry import ROBOT_RADIUS_CM, SHIPPED_MAPS, STEP_CM, OfficeMap, map_source
-from twodrl_envs.nomad.realistic import RealisticModel
 from twodrl_envs.nomad.sensors import HIGH_CM, LOW_CM
 
 SCHEMA_VERSION = 1
@@ -122,7 +120,7 @@ class SensorDatabase:
             raise ValueError(f"{source}: no readings recorded at the start cell {_xy(core.office.start)}")
 
 
-def _metadata(core: OfficeCore, recording: dict[str, Any]) -> dict[str, Any]:
+def database_metadata(core: OfficeCore, recording: dict[str, Any]) -> dict[str, Any]:
     text, digest = map_fingerprint(core.office)
     return {
         "map_name": core.office.name,
@@ -246,71 +244,6 @@ def load_database(path: str | Path | None = None, core: OfficeCore | None = None
     return db
 
 
-def record_database(
-    k: int,
-    *,
-    map: str | Path | None = None,
-    noise: sensors.NoiseModel | None = None,
-    seed: int = 0,
-    progress: bool = False,
-    model: RealisticModel | None = None,
-) -> SensorDatabase:
-    """Record ``k`` readings per reachable cell of a virtual robot.
-
-    With ``model`` (a :class:`~twodrl_envs.nomad.realistic.RealisticModel`, the stand-in robot of
-    ``NomadOfficeReal-v0``) the robot records as a real one would: it drives to each cell by dead
-    reckoning and files the reading taken at its drifted true pose under its odometry's cell
-    (:func:`twodrl_envs.memorable.recording.drive_and_record`). Otherwise it is placed exactly on each
-    cell: ``noise=None`` records the ideal (exact) sensors, a
-    :class:`~twodrl_envs.nomad.sensors.NoiseModel` adds per-reading noise to them. Readings are saturated
-    to the sensors' ranges as a real robot reports them. Unreachable free cells get no readings.
-    """
-    if isinstance(k, bool) or not isinstance(k, int) or k < 1:
-        raise ValueError(f"k must be a positive int, got {k!r}")
-    if model is not None and not isinstance(model, RealisticModel):
-        raise TypeError(f"model must be a RealisticModel or None, got {type(model).__name__}: {model!r}")
-    if model is not None and noise is not None:
-        raise ValueError("pass either model (the stand-in robot) or noise (noisy ideal sensors), not both")
-    core = office_core(map)
-    if model is not None:
-        counts, per_cell, stats = drive_and_record(core, model, k, seed)
-        recording = {
-            "source": "simulated",
-            "sensor_model": "realistic (twodrl_envs.nomad.realistic.RealisticModel, NomadOfficeReal-v0)",
-            "model": model.describe(),
-            "samples_per_cell": k,
-            "seed": seed,
-            "how": "stand-in robot driven from the start to every reachable cell by dead reckoning, once per tour; "
-            "each reading taken at the drifted true pose, filed under the odometry's cell",
-            **stats,
-        }
-        ranges = np.concatenate([r for r in per_cell if len(r)], axis=0)
-        return SensorDatabase(core.lattice.cells.copy(), counts, ranges, _metadata(core, recording))
-    rng = np.random.default_rng(seed)
-    cells = np.flatnonzero(core.lattice.reachable)
-    counts = np.where(core.lattice.reachable, k, 0).astype(np.int64)
-    rows = []
-    iterator: Any = cells
-    if progress:
-        from tqdm import tqdm
-
-        iterator = tqdm(cells, desc="recording cells", unit="cell")
-    for cell in iterator:
-        exact = np.repeat(core.ranges[cell : cell + 1], k, axis=0)
-        if noise is not None:
-            exact = noise.sample(exact, rng)
-        rows.append(np.clip(exact, LOW_CM, HIGH_CM))
-    recording = {
-        "source": "simulated",
-        "sensor_model": "ideal" if noise is None else "noisy ideal (twodrl_envs.nomad.sensors.NoiseModel)",
-        "noise_model": None if noise is None else asdict(noise),
-        "samples_per_cell": k,
-        "seed": seed,
-        "how": "virtual robot placed on every reachable lattice cell, k independent noisy readings per cell",
-    }
-    return SensorDatabase(core.lattice.cells.copy(), counts, np.concatenate(rows, axis=0), _metadata(core, recording))
-
-
 def import_csv(
     path: str | Path, *, map: str | Path | None = None, require_all_cells: bool = True, tolerance_cm: float = 5.0
 ) -> SensorDatabase:
@@ -385,4 +318,4 @@ def import_csv(
         "cells_recorded": int((counts > 0).sum()),
         "how": "imported from a CSV log of robot readings, positions snapped to the 10 cm lattice",
     }
-    return SensorDatabase(lat.cells.copy(), counts, ranges, _metadata(core, recording))
+    return SensorDatabase(lat.cells.copy(), counts, ranges, database_metadata(core, recording))
