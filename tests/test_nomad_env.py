@@ -180,3 +180,28 @@ def test_shipped_maps_by_name_and_id(env_id, kwargs, start):
 def test_unknown_map_name_is_value_error():
     with pytest.raises(ValueError, match=r"closed.*does not exist"):
         gym.make("twodrl_envs:NomadOffice-v0", map="closed")
+
+
+@pytest.mark.parametrize("env_id", ["NomadOffice-v0", "NomadOfficeMemorable-v0", "NomadOfficeReal-v0"])
+def test_exploring_starts_draw_reachable_cells_outside_the_goal(env_id):
+    """``starts="uniform"``: each episode starts at a cell drawn from the robot's start cells (reachable, not in the
+    goal, with a way to it), seeded; the default starts every episode at the map's start."""
+    env = gym.make(env_id, starts="uniform")
+    robot = env.unwrapped.robot
+    cells = robot.start_cells
+    assert (
+        len(cells) > 100 and not env.unwrapped.core.goal[cells].any() and np.isfinite(robot.goal_distance[cells]).all()
+    )
+    starts = [env.reset(seed=0 if i == 0 else None)[1]["position_cm"] for i in range(200)]
+    allowed = {tuple(xy) for xy in env.unwrapped.core.lattice.cells[cells].tolist()}
+    assert set(starts) <= allowed and len(set(starts)) > 100
+    again = gym.make(env_id, starts="uniform")
+    assert [again.reset(seed=0 if i == 0 else None)[1]["position_cm"] for i in range(200)] == starts
+    plain = gym.make(env_id)
+    start = tuple(float(v) for v in plain.unwrapped.core.office.start)
+    assert {plain.reset(seed=i)[1]["position_cm"] for i in range(5)} == {start}
+
+
+def test_exploring_starts_refuse_an_unknown_value():
+    with pytest.raises(ValueError, match="starts must be one of"):
+        gym.make("NomadOffice-v0", starts="random")

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from twodrl_envs.nomad.core import COLLISION_PUNISHMENT, GOAL_REWARD, MOVE_PUNISHMENT, OfficeCore
+from twodrl_envs.nomad.core import COLLISION_PUNISHMENT, GOAL_REWARD, MOVE_PUNISHMENT, OfficeCore, goal_distances
 from twodrl_envs.nomad.geometry import clearance
 
 GAMMA = 0.9  # the paper's reward discount (section 3.2)
@@ -39,17 +39,8 @@ def distance_to_goal(core: OfficeCore, route: str | None = None) -> np.ndarray:
 
     Along a route, the other route's label region is closed (its cells get ``inf``).
     """
-    moves = core.lattice.moves
-    open_ = np.ones(len(moves), dtype=bool)
-    if route is not None:
-        open_ = core.route_code != 3 - _route_code(route)
-    dist = np.where(core.goal & open_, 0.0, np.inf)
-    while True:
-        nxt = np.where(moves >= 0, dist[np.maximum(moves, 0)], np.inf).min(axis=1) + 1.0
-        new = np.where(core.goal | ~open_, dist, np.minimum(dist, nxt))
-        if np.array_equal(new, dist):
-            return dist
-        dist = new
+    passable = None if route is None else core.route_code != 3 - _route_code(route)
+    return goal_distances(core, core.lattice.moves, passable)
 
 
 def follower_actions(core: OfficeCore, route: str) -> np.ndarray:

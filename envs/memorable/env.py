@@ -76,9 +76,10 @@ class NomadOfficeMemorableEnv(NomadOfficeEnv):
         observe_odometry: bool = True,
         render_mode: str | None = None,
         observation: str = "sensors",
+        starts: str = "map",
     ) -> None:
         core = office_core(map)
-        self._setup(core, ReplayRobot(core, database), observe_odometry, render_mode, observation)
+        self._setup(core, ReplayRobot(core, database), observe_odometry, render_mode, observation, starts)
 
 
 class BatchedNomadOfficeMemorable(BatchedNomadOffice):
@@ -94,7 +95,8 @@ class BatchedNomadOfficeMemorable(BatchedNomadOffice):
         render_mode: str | None = None,
         max_episode_steps: int = MAX_EPISODE_STEPS,
         observation: str = "sensors",
+        starts: str = "map",
     ) -> None:
         core = office_core(map)
         robot = ReplayRobot(core, database)
-        self._setup(num_envs, core, robot, observe_odometry, render_mode, max_episode_steps, observation)
+        self._setup(num_envs, core, robot, observe_odometry, render_mode, max_episode_steps, observation, starts)

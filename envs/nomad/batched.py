@@ -28,11 +28,13 @@ from twodrl_envs.nomad.core import (
     IdealRobot,
     OfficeCore,
     Robot,
+    check_starts,
     continuous_move,
     episode_keys,
     evaluations,
     office_core,
     route_code_at,
+    start_draws,
 )
 from twodrl_envs.nomad.geometry import MOVES_CM
 from twodrl_envs.nomad.office import check_observation, non_negative, observation_space, sensor_noise_model
@@ -69,11 +71,12 @@ class BatchedNomadOffice(VectorEnv):
         render_mode: str | None = None,
         max_episode_steps: int = MAX_EPISODE_STEPS,
         observation: str = "sensors",
+        starts: str = "map",
     ) -> None:
         core = office_core(map)
         noise = sensor_noise_model(sensor_noise)
         robot = IdealRobot(core, noise, non_negative("step_sd_cm", step_sd_cm), non_negative("slip_sd_cm", slip_sd_cm))
-        self._setup(num_envs, core, robot, observe_odometry, render_mode, max_episode_steps, observation)
+        self._setup(num_envs, core, robot, observe_odometry, render_mode, max_episode_steps, observation, starts)
 
     def _setup(
         self,
@@ -84,6 +87,7 @@ class BatchedNomadOffice(VectorEnv):
         render_mode: str | None,
         max_episode_steps: int,
         observation: str,
+        starts: str,
     ) -> None:
         """Spaces and state of ``num_envs`` ``robot``s in ``core``'s office (every variant's constructor ends here)."""
         if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
@@ -97,6 +101,8 @@ class BatchedNomadOffice(VectorEnv):
         self.core, self.robot, self.render_mode = core, robot, render_mode
         self.observation = check_observation(observation, robot.on_lattice, type(self).__name__)
         self.observe_odometry = observe_odometry
+        self.starts = check_starts(starts)
+        self._start_cells = robot.start_cells
         self.num_envs = int(num_envs)
         self.max_episode_steps = max_episode_steps
         self.single_observation_space = observation_space(core, observation, observe_odometry)
@@ -145,11 +151,17 @@ class BatchedNomadOffice(VectorEnv):
         return obs, self._info(np.zeros(self.num_envs), zeros, zeros)
 
     def _restart(self, rows: np.ndarray) -> None:
-        """Put the robots ``rows`` (bool mask) back at the start of a new episode."""
-        self._cell[rows] = self.core.start_cell
-        self._pos[rows] = self._start
-        self._odo[rows] = self._start
-        self._route[rows] = self._start_route
+        """Put the robots ``rows`` (bool mask) at the start of a new episode (as ``starts`` says)."""
+        if self.starts == "uniform":
+            cells = self._start_cells[start_draws(self._key[rows], len(self._start_cells))]
+            self._cell[rows] = cells
+            self._pos[rows] = self._odo[rows] = self.core.lattice.cells[cells]
+            self._route[rows] = self.core.route_code[cells]
+        else:
+            self._cell[rows] = self.core.start_cell
+            self._pos[rows] = self._start
+            self._odo[rows] = self._start
+            self._route[rows] = self._start_route
         self._t[rows] = 0
         if self.render_mode is not None:
             positions = self._positions()

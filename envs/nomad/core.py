@@ -44,6 +44,9 @@ ROUTES: tuple[str | None, ...] = (None, "shortcut", "detour")
 """``info["route"]`` of route code 0, 1, 2."""
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _MASK64 = (1 << 64) - 1
+_START_SALT = 0x5851F42D4C957F2D
+STARTS = ("map", "uniform")
+"""Where episodes start: the map's start, or a cell drawn from :attr:`Robot.start_cells` (exploring starts)."""
 
 
 @dataclass(frozen=True)
@@ -169,6 +172,21 @@ def continuous_move(
     return target, collided, code, goal
 
 
+def goal_distances(core: OfficeCore, moves: np.ndarray, passable: np.ndarray | None = None) -> np.ndarray:
+    """Fewest moves ``(n_cells,)`` from each cell to a goal cell by the move table ``moves`` (``inf``: none).
+
+    ``passable`` (bool ``(n_cells,)``) closes the cells where it is False (they get ``inf``).
+    """
+    open_ = np.ones(len(moves), dtype=bool) if passable is None else passable
+    dist = np.where(core.goal & open_, 0.0, np.inf)
+    while True:
+        nxt = np.where(moves >= 0, dist[np.maximum(moves, 0)], np.inf).min(axis=1) + 1.0
+        new = np.where(core.goal | ~open_, dist, np.minimum(dist, nxt))
+        if np.array_equal(new, dist):
+            return dist
+        dist = new
+
+
 # --- counter-based keys ---------------------------------------------------------------------
 
 
@@ -198,6 +216,25 @@ def episode_key(base: int, episode: int) -> int:
     return counter_word((base + episode * int(_GOLDEN)) & _MASK64, 0)
 
 
+def start_draws(keys: np.ndarray, n: int) -> np.ndarray:
+    """Indices ``(len(keys),)`` in ``range(n)`` drawn counter-based from episode keys (exploring starts)."""
+    return (sensors.counter_hash(keys ^ np.uint64(_START_SALT), np.zeros(len(keys), dtype=np.int64))[:, 0] % n).astype(
+        np.intp
+    )
+
+
+def start_draw(key: int, n: int) -> int:
+    """:func:`start_draws` of one episode key, in Python integers."""
+    return counter_word(key ^ _START_SALT, 0) % n
+
+
+def check_starts(starts: object) -> str:
+    """``starts`` if it is one of :data:`STARTS`, else ``ValueError``."""
+    if not isinstance(starts, str) or starts not in STARTS:
+        raise ValueError(f"starts must be one of {STARTS}, got {starts!r}")
+    return starts
+
+
 # --- the robot seam -------------------------------------------------------------------------
 
 
@@ -221,6 +258,25 @@ class Robot:
     def outcomes(self) -> LatticeOutcomes:
         """:class:`LatticeOutcomes` of :attr:`moves`."""
         return LatticeOutcomes.of(self.core, self.moves)
+
+    @cached_property
+    def goal_distance(self) -> np.ndarray:
+        """Fewest moves ``(n_cells,)`` from each cell to the goal by :attr:`moves` (``inf``: none)."""
+        return goal_distances(self.core, self.moves)
+
+    @cached_property
+    def start_cells(self) -> np.ndarray:
+        """Cells an exploring start may draw: reachable from the map's start by :attr:`moves`, outside the goal,
+        with a way to the goal (ascending indices)."""
+        reached = np.zeros(len(self.moves), dtype=bool)
+        reached[self.core.start_cell] = True
+        frontier = np.array([self.core.start_cell])
+        while len(frontier):
+            nxt = self.moves[frontier].ravel()
+            nxt = np.unique(nxt[nxt >= 0])
+            frontier = nxt[~reached[nxt]]
+            reached[frontier] = True
+        return np.flatnonzero(reached & ~self.core.goal & np.isfinite(self.goal_distance))
 
     def cell_readings(self, cells: np.ndarray, keys: np.ndarray, steps: np.ndarray) -> np.ndarray:
         """Normalised readings ``(n, 32)`` at lattice cells."""

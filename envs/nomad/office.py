@@ -20,11 +20,13 @@ from twodrl_envs.nomad.core import (
     IdealRobot,
     OfficeCore,
     Robot,
+    check_starts,
     continuous_move,
     episode_key,
     evaluations,
     office_core,
     route_code_at,
+    start_draw,
 )
 from twodrl_envs.nomad.geometry import MOVES_CM, ROBOT_RADIUS_CM, clearance
 from twodrl_envs.nomad.sensors import NoiseModel
@@ -114,14 +116,21 @@ class NomadOfficeEnv(gym.Env):
         slip_sd_cm: float = 0.0,
         render_mode: str | None = None,
         observation: str = "sensors",
+        starts: str = "map",
     ) -> None:
         core = office_core(map)
         noise = sensor_noise_model(sensor_noise)
         robot = IdealRobot(core, noise, non_negative("step_sd_cm", step_sd_cm), non_negative("slip_sd_cm", slip_sd_cm))
-        self._setup(core, robot, observe_odometry, render_mode, observation)
+        self._setup(core, robot, observe_odometry, render_mode, observation, starts)
 
     def _setup(
-        self, core: OfficeCore, robot: Robot, observe_odometry: bool, render_mode: str | None, observation: str
+        self,
+        core: OfficeCore,
+        robot: Robot,
+        observe_odometry: bool,
+        render_mode: str | None,
+        observation: str,
+        starts: str,
     ) -> None:
         """Spaces and state of an env of ``robot`` in ``core``'s office (every variant's constructor ends here)."""
         if not isinstance(observe_odometry, bool):
@@ -132,6 +141,8 @@ class NomadOfficeEnv(gym.Env):
         self.observation = check_observation(observation, robot.on_lattice, type(self).__name__)
         self.observe_odometry = observe_odometry
         self.render_mode = render_mode
+        self.starts = check_starts(starts)
+        self._start_cells = robot.start_cells.tolist() if starts == "uniform" else []
         self.observation_space = observation_space(core, observation, observe_odometry)
         self.action_space = spaces.Discrete(4)
         self._outcomes = robot.outcomes.rows if robot.on_lattice else []
@@ -167,7 +178,7 @@ class NomadOfficeEnv(gym.Env):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray | int, dict[str, Any]]:
-        """Start an episode at the map's start, or at ``options["position"] = (x_cm, y_cm)``."""
+        """Start an episode at ``options["position"] = (x_cm, y_cm)``, else as ``starts`` says (the map's start)."""
         super().reset(seed=seed)
         if seed is not None or self._episode < 0:
             self._base_key = int(self.np_random.integers(0, 2**63, size=1, dtype=np.uint64)[0])
@@ -180,6 +191,10 @@ class NomadOfficeEnv(gym.Env):
             raise ValueError(f"options may only contain 'position', got {options!r}")
         if "position" in options:
             self._pos, self._cell, self._route = self._start_state(options["position"])
+        elif self._start_cells:  # exploring starts: a cell drawn from the episode key
+            cell = self._start_cells[start_draw(self._key, len(self._start_cells))]
+            self._pos, self._route = self.core.lattice.cells[cell].copy(), int(self.core.route_code[cell])
+            self._cell = cell if self.robot.on_lattice else -1
         else:  # the map's start, checked once per env
             if self._start is None:
                 self._start = self._start_state(self.core.office.start)

@@ -413,9 +413,10 @@ class NomadOfficeRealEnv(NomadOfficeEnv):
         observe_odometry: bool = True,
         render_mode: str | None = None,
         observation: str = "sensors",
+        starts: str = "map",
     ) -> None:
         core = office_core(map)
-        self._setup(core, RealisticRobot(core, model), observe_odometry, render_mode, observation)
+        self._setup(core, RealisticRobot(core, model), observe_odometry, render_mode, observation, starts)
 
 
 class BatchedNomadOfficeReal(BatchedNomadOffice):
@@ -435,7 +436,8 @@ class BatchedNomadOfficeReal(BatchedNomadOffice):
         render_mode: str | None = None,
         max_episode_steps: int = MAX_EPISODE_STEPS,
         observation: str = "sensors",
+        starts: str = "map",
     ) -> None:
         core = office_core(map)
         robot = RealisticRobot(core, model)
-        self._setup(num_envs, core, robot, observe_odometry, render_mode, max_episode_steps, observation)
+        self._setup(num_envs, core, robot, observe_odometry, render_mode, max_episode_steps, observation, starts)
