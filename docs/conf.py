@@ -4,6 +4,7 @@ Build: ``python -m sphinx -W --keep-going -b html docs docs/_build/html`` (needs
 """
 
 import sys
+from importlib.metadata import version
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -13,13 +14,12 @@ sys.path.insert(0, str(ROOT / "docs" / "_ext"))
 project = "sb3-twodrl"
 author = "sb3-twodrl contributors"
 copyright = "sb3-twodrl contributors"
-release = "0.1.0"
+release = version("sb3-twodrl")
 
 extensions = [
     "myst_parser",
     "sphinx.ext.autodoc",
     "sphinx.ext.napoleon",
-    "sphinx.ext.mathjax",
     "repository_links",
 ]
 
@@ -27,7 +27,6 @@ source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 root_doc = "index"
 exclude_patterns = ["_build", "_ext"]
 
-myst_enable_extensions = ["dollarmath"]
 myst_heading_anchors = 4
 """GitHub-style anchors (``page.md#a-heading``) for headings down to ``####``, as the pages link them."""
 
@@ -35,9 +34,6 @@ autodoc_default_options = {"members": True, "undoc-members": True, "show-inherit
 autodoc_typehints = "description"
 autodoc_typehints_format = "short"
 autodoc_preserve_defaults = True
-napoleon_google_docstring = False
-napoleon_numpy_docstring = True
-nitpicky = False
 
 html_theme = "furo"
 html_title = "sb3-twodrl"
