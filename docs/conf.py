@@ -4,7 +4,7 @@ Build: ``python -m sphinx -W --keep-going -b html docs docs/_build/html`` (needs
 """
 
 import sys
-from importlib.metadata import version
+from importlib import metadata
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -14,7 +14,7 @@ sys.path.insert(0, str(ROOT / "docs" / "_ext"))
 project = "sb3-twodrl"
 author = "sb3-twodrl contributors"
 copyright = "sb3-twodrl contributors"
-release = version("sb3-twodrl")
+release = metadata.version("sb3-twodrl")
 
 extensions = [
     "myst_parser",
