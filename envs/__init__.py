@@ -15,7 +15,7 @@ regions) or a map file (docs/own_office.md). Every ID has a ``vector_entry_point
 (``gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point", **options)``), which takes every
 option of ``gym.make(id, **options)``: sub-env ``i`` behaves exactly like ``gym.make(id, **options)`` (tested).
 
-and, for the benchmark (``twodrl_envs.public``, docs/benchmark.md), public tasks whose punishment is
+and, for the benchmark (``twodrl_envs.public``, docs/public_tasks.md), public tasks whose punishment is
 written into ``info["punishment"]`` (``reward_split="info"``):
 
 * ``LunarLanderSplit-v3``: LunarLander-v3, crash and fuel as punishment;

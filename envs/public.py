@@ -1,4 +1,4 @@
-"""Public tasks with an explicit punishment stream, for the benchmark (docs/benchmark.md).
+"""Public tasks with an explicit punishment stream, for the benchmark (docs/public_tasks.md).
 
 Each wrapper keeps the convention of ``reward_split="info"``: the scalar reward is the net
 ``r_R - r_P`` and ``info["punishment"]`` holds ``r_P >= 0``, so a stock algorithm and a 2D-RL

@@ -1,4 +1,4 @@
-"""Environment speed, measured side by side in one run (targets: docs/benchmarks.md).
+"""Environment speed, measured side by side in one run (targets: docs/speed.md).
 
 * single-env ``NomadOffice-v0`` and ``NomadOfficeMemorable-v0`` steps/s divided by ``CartPole-v1``'s
   (target >= 0.5), all made with ``disable_env_checker=True`` and driven by the same loop,

@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Throughput of the paper's protocol, both arms measured side by side in one run (targets: docs/benchmarks.md).
+"""Throughput of the paper's protocol, both arms measured side by side in one run (targets: docs/speed.md).
 
 For each n_envs: one (algo, seed) run per arm (``a2c`` is SB3's A2C on the experiments' fast path,
 :mod:`twodrl_bench.baselines`) of ``--epochs`` paper-sized epochs (K learning

@@ -27,7 +27,9 @@ def manifest_entries() -> list[str]:
 
 
 def documents() -> list[Path]:
-    return [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md")), MANIFEST]
+    """The README, the pages under ``docs/`` (not the site built into ``docs/_build/``) and the manifest."""
+    pages = [p for p in sorted((ROOT / "docs").rglob("*.md")) if "_build" not in p.relative_to(ROOT / "docs").parts]
+    return [ROOT / "README.md", *pages, MANIFEST]
 
 
 def ignored() -> set[str]:

@@ -13,7 +13,7 @@ Measured gain, with :mod:`sb3_twodrl.common.utils`' statistics: ``TwoDimA2C``/``
 themselves with SB3's module calls, SB3's ``CategoricalDistribution``, a per-parameter optimizer and
 numpy's statistics (the same parameters bit for bit, ``tests/test_fast.py``), env steps per CPU second,
 one torch thread, alternating runs, median of 3, on a loaded 2-core machine (``scripts/bench_algo.py
---pairs a2c-layer ppo-layer``; ``docs/benchmarks.md``): TwoDimA2C 1.23x and TwoDimPPO 1.22x on
+--pairs a2c-layer ppo-layer``; ``docs/speed.md``): TwoDimA2C 1.23x and TwoDimPPO 1.22x on
 CartPole-v1 (8 envs, defaults), TwoDimA2C 1.20x on the batched NomadOffice-v0 (64 envs).
 """
 

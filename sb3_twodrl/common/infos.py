@@ -11,7 +11,7 @@ columns to those who ask: :meth:`BatchInfos.column` (the reward split, the navig
 Measured gain: ``TwoDimA2C`` on the batched NomadOffice-v0 (64 envs) learns 1.16-1.23x as many env
 steps per CPU second as with every step's infos made a list of dicts (the same parameters bit for bit;
 one torch thread, alternating runs, median of 3, two runs on a loaded 2-core machine;
-``scripts/bench_algo.py --pairs a2c-infos --batched``; ``docs/benchmarks.md``).
+``scripts/bench_algo.py --pairs a2c-infos --batched``; ``docs/speed.md``).
 """
 
 from collections.abc import Sequence
