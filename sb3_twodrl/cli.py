@@ -15,7 +15,7 @@ import importlib
 import runpy
 import sys
 
-__all__ = ["ZOO_MODULES", "enjoy", "require_extra", "train"]
+__all__ = ["ZOO_MODULES", "enjoy", "report_goal_rate", "require_extra", "train"]
 
 ZOO_MODULES = ("rl_zoo3", "optuna", "pandas", "requests")
 """What the ``zoo`` extra installs and the commands import (rl-zoo3's enjoy imports ``requests`` undeclared)."""
@@ -41,12 +41,72 @@ def train(argv: list[str] | None = None) -> None:
     require_extra("zoo", *ZOO_MODULES)
     from rl_zoo3.train import train as zoo_train
 
-    from sb3_twodrl.zoo import _has_option, prepare_zoo_argv, run_zoo_entry
+    from sb3_twodrl.zoo import _has_option, apply_env_settings, prepare_zoo_argv, run_zoo_entry
 
     argv = prepare_zoo_argv(sys.argv[1:] if argv is None else argv, packaged_conf=True)
+    argv, settings = apply_env_settings(argv)
+    if settings is not None:
+        print(f"sb3-twodrl-train: {settings.get('note') or 'settings derived from the env options'}", flush=True)
     if not _has_option(argv, "--num-threads"):
         argv += ["--num-threads", "1"]
     run_zoo_entry("sb3-twodrl-train", argv, zoo_train)
+    if not _has_option(argv, "-optimize", "--optimize-hyperparameters"):
+        report_goal_rate(argv)
+
+
+def report_goal_rate(argv: list[str], episodes: int = 20) -> float | None:
+    """Run ``episodes`` deterministic test episodes of the model ``train`` just saved; print the goal rate.
+
+    The test env is made with the command's ``--env-kwargs`` and ``--eval-env-kwargs`` (an env that derives
+    settings starts its test episodes where its user's would: a map's start). The goal rate is the share of
+    episodes whose last ``info["is_success"]`` is true; an env that never sets it gets no line (None). Below 0.8
+    the line says so and what to change.
+    """
+    import os
+
+    import numpy as np
+    from rl_zoo3.utils import ALGOS, create_test_env, get_latest_run_id, get_saved_hyperparams
+
+    from sb3_twodrl.zoo import _dict_options, _option_value
+
+    algo, env_id = _option_value(argv, "--algo") or "ppo", _option_value(argv, "--env") or "CartPole-v1"
+    folder = _option_value(argv, "-f", "--log-folder") or "logs"
+    _, given = _dict_options(argv)
+    log_path = os.path.join(folder, algo, f"{env_id}_{get_latest_run_id(os.path.join(folder, algo), env_id)}")
+    model_path = os.path.join(log_path, f"{env_id}.zip")
+    if not os.path.isfile(model_path):
+        return None
+    hyperparams, stats_path = get_saved_hyperparams(os.path.join(log_path, env_id), norm_reward=False, test_mode=True)
+    env = create_test_env(
+        env_id,
+        n_envs=1,
+        stats_path=stats_path,
+        seed=int(_option_value(argv, "--seed") or 0),
+        log_dir=None,
+        should_render=False,
+        hyperparams=hyperparams,
+        env_kwargs={**given["--env-kwargs"], **given["--eval-env-kwargs"]},
+    )
+    model = ALGOS[algo].load(model_path, device="cpu")
+    goals: list[bool] = []
+    obs = env.reset()
+    while len(goals) < episodes:
+        actions, _ = model.predict(obs, deterministic=True)
+        obs, _, dones, infos = env.step(actions)
+        if dones[0]:
+            if "is_success" not in infos[0]:
+                return None
+            goals.append(bool(infos[0]["is_success"]))
+    env.close()
+    rate = float(np.mean(goals))
+    print(f"sb3-twodrl-train: goal rate {rate:.2f} ({sum(goals)} of {episodes} deterministic test episodes)")
+    if rate < 0.8:
+        print(
+            f"sb3-twodrl-train: below 0.8: the policy has not learned the task in {model.num_timesteps:,} steps. "
+            "Train longer (-n, the budget), try another --seed, or make the task shorter (the map's start nearer "
+            "its goal); docs/own_office.md says what each setting does."
+        )
+    return rate
 
 
 def enjoy(argv: list[str] | None = None) -> None:

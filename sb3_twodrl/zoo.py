@@ -21,11 +21,12 @@ from collections.abc import Callable
 from typing import Any
 
 from sb3_twodrl.a2c import TwoDimA2C
-from sb3_twodrl.hyperparams import PACKAGED, hyperparams_path
+from sb3_twodrl.hyperparams import PACKAGED, env_settings, hyperparams_path
 from sb3_twodrl.ppo import TwoDimPPO
 
 __all__ = [
     "ZOO_ALGOS",
+    "apply_env_settings",
     "convert_two_dim_params",
     "prepare_zoo_argv",
     "register_zoo",
@@ -168,3 +169,48 @@ def run_zoo_entry(prog: str, argv: list[str], entry: Callable[[], Any]) -> None:
         entry()
     finally:
         sys.argv = old
+
+
+_DICT_OPTIONS = ("--env-kwargs", "--eval-env-kwargs", "--hyperparams")
+
+
+def _dict_options(argv: list[str]) -> tuple[list[str], dict[str, dict[str, Any]]]:
+    """``argv`` without its rl-zoo3 ``key:value`` options, and those options parsed as rl-zoo3 parses them."""
+    import argparse
+
+    from rl_zoo3.utils import StoreDict
+
+    parser = argparse.ArgumentParser(add_help=False, allow_abbrev=False)
+    for option in _DICT_OPTIONS:
+        parser.add_argument(option, type=str, nargs="+", action=StoreDict, default={})
+    known, rest = parser.parse_known_args(argv)
+    return rest, {option: getattr(known, option[2:].replace("-", "_")) for option in _DICT_OPTIONS}
+
+
+def apply_env_settings(argv: list[str]) -> tuple[list[str], dict[str, Any] | None]:
+    """rl-zoo3 ``train`` arguments with the settings the env derives from its ``--env-kwargs``, and those settings.
+
+    The settings are the env class's ``training_settings`` (:func:`~sb3_twodrl.hyperparams.env_settings`); None
+    leaves the command line unchanged.
+
+    Derived hyperparameters are added to ``--hyperparams``, training env options to ``--env-kwargs`` and test env
+    options to ``--eval-env-kwargs``; what the user wrote wins (``-n`` over the budget, as rl-zoo3 does).
+    """
+    env_id = _option_value(argv, "--env") or "CartPole-v1"
+    rest, given = _dict_options(argv)
+    settings = env_settings(env_id, given["--env-kwargs"])
+    if settings is None:
+        return argv, None
+    merged = {
+        "--hyperparams": {**settings.get("hyperparams", {}), **given["--hyperparams"]},
+        "--env-kwargs": {**settings.get("env_kwargs", {}), **given["--env-kwargs"]},
+        "--eval-env-kwargs": {
+            **given["--env-kwargs"],
+            **settings.get("eval_env_kwargs", {}),
+            **given["--eval-env-kwargs"],
+        },
+    }
+    for option, values in merged.items():
+        if values:
+            rest += [option, *(f"{key}:{value!r}" for key, value in values.items())]
+    return rest, settings

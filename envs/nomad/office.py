@@ -30,6 +30,7 @@ from twodrl_envs.nomad.core import (
 )
 from twodrl_envs.nomad.geometry import MOVES_CM, ROBOT_RADIUS_CM, clearance
 from twodrl_envs.nomad.sensors import NoiseModel
+from twodrl_envs.nomad.settings import map_settings
 
 OBSERVATIONS = ("sensors", "cell")
 
@@ -122,6 +123,24 @@ class NomadOfficeEnv(gym.Env):
         noise = sensor_noise_model(sensor_noise)
         robot = IdealRobot(core, noise, non_negative("step_sd_cm", step_sd_cm), non_negative("slip_sd_cm", slip_sd_cm))
         self._setup(core, robot, observe_odometry, render_mode, observation, starts)
+
+    @classmethod
+    def training_settings(cls, **options: Any) -> dict[str, Any] | None:
+        """Training settings derived from the map of an env made with ``options``; None on the paper's maps.
+
+        A trainer applies ``hyperparams`` over its own, ``env_kwargs`` to its training envs and
+        ``eval_env_kwargs`` to its test envs, and shows ``note`` (:mod:`twodrl_envs.nomad.settings`).
+        """
+        own = {key: value for key, value in options.items() if key not in ("starts", "max_episode_steps")}
+        settings = map_settings(cls(**own).robot)
+        if settings is None:
+            return None
+        return {
+            "hyperparams": settings.hyperparams(),
+            "env_kwargs": settings.env_kwargs(),
+            "eval_env_kwargs": settings.eval_env_kwargs(),
+            "note": settings.note(),
+        }
 
     def _setup(
         self,

@@ -9,20 +9,25 @@
 
 The console commands and the bench find the files with :func:`hyperparams_path` and read an entry as
 written with :func:`read_entry`; there is no default entry.
+
+An env may derive settings from its options (a user's own map, say): if its class (the registered entry point)
+has a ``training_settings(**options)`` class method returning a dict (``hyperparams`` over the entry's,
+``env_kwargs`` for training envs, ``eval_env_kwargs`` for test envs, a ``note``), :func:`load` applies it when
+given the env's options, and the training command does too (:func:`env_settings`). None keeps the entry as it is.
 """
 
 from __future__ import annotations
 
 import importlib
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
 import yaml
 
-__all__ = ["PACKAGED", "Hyperparams", "evaluate", "hyperparams_path", "load", "read_entry"]
+__all__ = ["PACKAGED", "Hyperparams", "env_settings", "evaluate", "hyperparams_path", "load", "read_entry"]
 
 PACKAGED = ("a2c", "ppo", "twoda2c", "twodppo")
 """The algorithms this package ships a file for."""
@@ -81,6 +86,12 @@ class Hyperparams:
     """``VecNormalize`` arguments (``gamma`` the algorithm's, as rl-zoo3 sets it); None: no normalisation."""
     callback: tuple[Any, ...]
     """The entry's callbacks as written: class paths, or ``{class path: kwargs}``."""
+    env_kwargs: dict[str, Any] = field(default_factory=dict)
+    """Options of the training envs: the ones given to :func:`load` and those the env derived from them."""
+    eval_env_kwargs: dict[str, Any] = field(default_factory=dict)
+    """Options of the test envs (the env's derived test options over the ones given)."""
+    note: str = ""
+    """What the env derived from its options (:func:`env_settings`), empty if nothing."""
 
     def callbacks(self) -> list[Any]:
         """New instances of the entry's callbacks (rl-zoo3's format)."""
@@ -111,8 +122,36 @@ def _schedule(key: str, value: Any) -> Any:
     return LinearSchedule(float(start), 0.0, 1.0)  # rl-zoo3's SimpleLinearSchedule: initial * progress_remaining
 
 
-def load(algo: str, env_id: str, directory: str | os.PathLike | None = None) -> Hyperparams:
+def env_settings(env_id: str, env_kwargs: dict[str, Any] | None = None) -> dict[str, Any] | None:
+    """The settings the env ``env_id`` derives from its options ``env_kwargs`` (module docstring), or None.
+
+    None when the env's class has no ``training_settings`` or derives nothing from these options.
+
+    :raises ValueError: if the class returns something else than None or a dict of the known keys
+    """
+    import gymnasium as gym
+    from gymnasium.envs.registration import load_env_creator
+
+    spec = gym.spec(env_id)
+    creator = spec.entry_point if callable(spec.entry_point) else load_env_creator(spec.entry_point)
+    derive = getattr(creator, "training_settings", None)
+    if derive is None:
+        return None
+    settings = derive(**{**spec.kwargs, **(env_kwargs or {})})
+    known = {"hyperparams", "env_kwargs", "eval_env_kwargs", "note"}
+    if settings is not None and (not isinstance(settings, dict) or set(settings) - known):
+        raise ValueError(f"{env_id}: training_settings must return None or a dict of {sorted(known)}, got {settings!r}")
+    return settings
+
+
+def load(
+    algo: str, env_id: str, directory: str | os.PathLike | None = None, env_kwargs: dict[str, Any] | None = None
+) -> Hyperparams:
     """The ``env_id`` entry of ``<algo>.yml`` (the packaged file, or the one in ``directory``), ready to train.
+
+    With ``env_kwargs`` (the env's options, e.g. ``{"map": "my_office.json"}``) the settings the env derives from
+    them (:func:`env_settings`) replace the entry's and fill :attr:`Hyperparams.env_kwargs` and
+    :attr:`Hyperparams.eval_env_kwargs`.
 
     :raises ValueError: naming ``algo`` or ``env_id`` and what exists, if there is no such file or entry,
         or if the entry uses an rl-zoo3 key this function does not apply (train it with ``sb3-twodrl-train``)
@@ -121,6 +160,10 @@ def load(algo: str, env_id: str, directory: str | os.PathLike | None = None) -> 
         raise ValueError(f"algo {algo!r} has no packaged hyperparameters (packaged: {', '.join(PACKAGED)})")
     path = hyperparams_path(algo, directory)
     entry = read_entry(path, env_id)
+    options = dict(env_kwargs or {})
+    derived = env_settings(env_id, options) if env_kwargs is not None else None
+    derived = derived or {}
+    entry.update(derived.get("hyperparams", {}))
     zoo_only = [key for key in _ZOO_ONLY if key in entry]
     if zoo_only:
         raise ValueError(f"{path}, {env_id}: {', '.join(zoo_only)} is applied by rl-zoo3 only (sb3-twodrl-train)")
@@ -149,4 +192,7 @@ def load(algo: str, env_id: str, directory: str | os.PathLike | None = None) -> 
         n_timesteps=int(float(entry["n_timesteps"])),
         normalize=normalize,
         callback=tuple(callback if isinstance(callback, list) else [callback]),  # one callback or a list
+        env_kwargs={**derived.get("env_kwargs", {}), **options},
+        eval_env_kwargs={**options, **derived.get("eval_env_kwargs", {})},
+        note=derived.get("note", ""),
     )
