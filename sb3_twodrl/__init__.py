@@ -9,6 +9,9 @@ from sb3_twodrl.callbacks import NavigationMetricsCallback
 from sb3_twodrl.common.policies import TwoDimActorCriticCnnPolicy, TwoDimActorCriticPolicy, TwoDimMultiInputPolicy
 from sb3_twodrl.ppo import TwoDimPPO
 
+__version__ = "0.1.0"
+"""The package's version: ``pyproject.toml`` reads it from here; ``CHANGELOG.md`` says what each one changed."""
+
 ALGOS: dict[str, type[BaseAlgorithm]] = {"a2c": A2C, "ppo": PPO, "twoda2c": TwoDimA2C, "twodppo": TwoDimPPO}
 """The algorithms by their rl-zoo3 names, the 2D-RL ones beside their stock baselines."""
 
@@ -20,5 +23,6 @@ __all__ = [
     "TwoDimActorCriticPolicy",
     "TwoDimMultiInputPolicy",
     "TwoDimPPO",
+    "__version__",
     "callbacks",
 ]

@@ -6,19 +6,23 @@ installed, so ``--algo twoda2c --env NomadOffice-v0`` works from any folder; eve
 networks on a shared machine, docs/zoo.md).
 ``sb3-twodrl-train`` reads the packaged ``<algo>.yml`` (:mod:`sb3_twodrl.hyperparams`) for a2c, ppo, twoda2c and
 twodppo unless ``-conf/--conf-file`` names another file. A command whose extra is missing exits, before any work,
-with the ``pip install`` line that adds it (:func:`require_extra`).
+with the ``pip install`` line that adds it (:func:`require_extra`). ``sb3-twodrl-enjoy`` without ``pygame`` (the
+``render`` extra: gymnasium's window) replays headless, as with ``--no-render``, and says so.
 """
 
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import runpy
 import sys
 
-__all__ = ["ZOO_MODULES", "enjoy", "report_goal_rate", "require_extra", "train"]
+__all__ = ["RENDER_MODULE", "ZOO_MODULES", "enjoy", "report_goal_rate", "require_extra", "train"]
 
 ZOO_MODULES = ("rl_zoo3", "optuna", "pandas", "requests")
 """What the ``zoo`` extra installs and the commands import (rl-zoo3's enjoy imports ``requests`` undeclared)."""
+RENDER_MODULE = "pygame"
+"""What rl-zoo3's enjoy needs to show the env in a window (gymnasium's human rendering); the ``render`` extra."""
 
 
 def require_extra(extra: str, *modules: str) -> None:
@@ -113,7 +117,8 @@ def enjoy(argv: list[str] | None = None) -> None:
     """``sb3-twodrl-enjoy``: rl-zoo3's ``enjoy`` (``-f`` defaults to ``logs``, train's folder).
 
     ``--record -o videos`` records a video instead (rl-zoo3's ``record_video``, needs ``moviepy``; the env must
-    support ``render_mode="rgb_array"``).
+    support ``render_mode="rgb_array"``). Without ``pygame`` it replays headless (``--no-render``) and says how to
+    get the window.
     """
     require_extra("zoo", *ZOO_MODULES)
     from sb3_twodrl.zoo import _has_option, prepare_zoo_argv, run_zoo_entry
@@ -132,6 +137,13 @@ def enjoy(argv: list[str] | None = None) -> None:
         return
     from rl_zoo3.enjoy import enjoy as zoo_enjoy
 
+    if "--no-render" not in argv and importlib.util.find_spec(RENDER_MODULE) is None:
+        print(
+            f"{RENDER_MODULE} not installed: replaying without a window (--no-render); for one, "
+            'pip install "sb3-twodrl[render]"',
+            file=sys.stderr,
+        )
+        argv.append("--no-render")
     if not _has_option(argv, "--num-threads"):
         argv += ["--num-threads", "1"]
     run_zoo_entry("sb3-twodrl-enjoy", argv, zoo_enjoy)

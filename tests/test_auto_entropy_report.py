@@ -179,3 +179,18 @@ def test_each_part_is_read_from_its_own_rows(tmp_path) -> None:
     ours, theirs = text.split("### NomadOffice-v0\n")[1].split("### NomadOffice-v0_long\n")
     assert "| a2c_ent0 | 0.1010 [0.1004, 0.1016] (n=10) | 0.000 (n=10) | 2/10 [0.06, 0.51] |" in ours
     assert "| a2c_ent0 | 0.2010 [0.2004, 0.2016] (n=10) | 0.000 (n=10) | 10/10 [0.72, 1.00] |" in theirs
+
+
+def test_the_claim_is_set_against_the_best_fixed_coefficient_once(tmp_path) -> None:
+    rows = [
+        {"task": "T", "arm": arm, "seed": seed, "final_return": float(seed), "train_events_per_episode": 0.1}
+        for arm in ("zero", "best", "auto98", "auto50", "twod0")
+        for seed in range(10)
+    ]
+    spec = {"name": "auto_entropy/T", "env": "T-v0", "protocol": {"task": "T"}, "rules": {**RULES, "fixed": "best"}}
+    spec["arms"] = {arm: {} for arm in ("zero", "best", "auto98", "auto50", "twod0")}
+    text = report([part(spec, rows, tmp_path / "best")], tmp_path / "best")
+    assert text.count("| twod0 - best |") == 1
+    spec = {**spec, "rules": RULES}  # fixed is zero, which the pairs already compare with the claim
+    text = report([part(spec, rows, tmp_path / "zero")], tmp_path / "zero")
+    assert text.count("| twod0 - zero |") == 1

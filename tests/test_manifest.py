@@ -149,3 +149,49 @@ def test_relative_links_in_the_docs_resolve() -> None:
                 if not (doc.parent / path).resolve().exists():
                     broken.append(f"{doc.relative_to(ROOT)}: {target}")
     assert broken == []
+
+
+def git(*args: str, stdin: str | None = None) -> str:
+    """The output of ``git args`` in the checkout; skips the test outside a git checkout."""
+    try:
+        return subprocess.run(["git", *args], cwd=ROOT, input=stdin, capture_output=True, text=True, check=True).stdout
+    except (OSError, subprocess.CalledProcessError):
+        pytest.skip("not a git checkout (or git is missing)")
+
+
+def made_by() -> dict[str, set[str]]:
+    """Per commit (full hash), the contents (blob hashes) it changed a file to, pure moves left out."""
+    made: dict[str, set[str]] = {}
+    commit = ""
+    for line in git("log", "-M", "--format=>%H", "--raw", "--no-abbrev", "HEAD").splitlines():
+        if line.startswith(">"):
+            commit = line[1:]
+            made[commit] = set()
+        elif line.startswith(":"):
+            _, _, _, new, status = line.split("\t")[0].split()[:5]
+            if status != "R100":
+                made[commit].add(new)
+    return made
+
+
+def test_each_file_is_as_its_rows_commit_made_it() -> None:
+    entries = [
+        (re.search(r"\]\(([^)]+)\)", cells[0]).group(1), cells) for _, rows in rows_by_section() for cells in rows
+    ]
+    contents = git("hash-object", "--stdin-paths", stdin="".join(f"results/{path}\n" for path, _ in entries)).split()
+    made = made_by()
+    wrong = []
+    for (path, cells), content in zip(entries, contents, strict=True):
+        commits = [c for c in made if c.startswith(cells[4])]
+        if len(commits) != 1 or content not in made[commits[0]]:
+            wrong.append(f"{path}: rows {cells[4]} did not make its content (`git log --follow -- results/{path}`)")
+    assert wrong == []
+
+
+def test_each_code_commit_is_its_rows_commit_or_before() -> None:
+    pairs = sorted({(cells[3], cells[4]) for _, rows in rows_by_section() for cells in rows})
+    git("rev-parse", "HEAD")  # skips outside a checkout
+    late = [
+        pair for pair in pairs if subprocess.run(["git", "merge-base", "--is-ancestor", *pair], cwd=ROOT).returncode
+    ]
+    assert late == [], "code commits after their rows commit"

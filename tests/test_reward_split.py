@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from sb3_twodrl import TwoDimA2C
-from sb3_twodrl.common.splitting import PYTHON_CHECK_MAX_ENVS, make_reward_split, split_rewards
+from sb3_twodrl.common.splitting import PYTHON_CHECK_MAX_ENVS, SPLIT_MODES, make_reward_split, split_rewards
 from tests.toy_envs import ScriptedFeedbackEnv
 
 FEEDBACK: dict[str, list[tuple[float, dict[str, Any]]]] = {
@@ -114,3 +114,10 @@ def test_an_info_value_that_is_no_number_is_an_error(value: Any) -> None:
 def test_a_callable_that_returns_no_pair_is_an_error(result: Any) -> None:
     with pytest.raises(ValueError, match="must return a pair"):
         split_rewards(make_reward_split(lambda r, info: result), np.zeros(2), [{}, {}], 1)
+
+
+@pytest.mark.parametrize("page", ["README.md", "docs/twodim_a2c.md"])
+def test_the_argument_table_lists_every_mode(page: str) -> None:
+    text = (Path(__file__).resolve().parent.parent / page).read_text()
+    row = next(line for line in text.splitlines() if line.startswith("| `reward_split` |"))
+    assert [mode for mode in SPLIT_MODES if f'`"{mode}"`' not in row] == []

@@ -219,3 +219,16 @@ def test_a_report_by_module_path_taking_records_and_specs(tmp_path, settings, ca
     run_study({**spec, "report": "tests.toy_records_report"}, tmp_path, "serial")
     assert "4 rows of ['toy'], arms ['a2c', 'twoda2c']" in capsys.readouterr().out
     assert (tmp_path / "table.md").read_text() == "4 rows of ['toy'], arms ['a2c', 'twoda2c']\n"
+
+
+def test_a_spec_without_a_report_writes_rows_only_and_report_names_the_missing_field(tmp_path, settings) -> None:
+    spec = toy_spec(settings, seeds=[0], protocol={"epochs": 1, "learn_episodes": 2, "test_episodes": 2})
+    del spec["report"]
+    assert validate(spec)["report"] is None
+    path = write_spec(tmp_path / "toy.yml", spec)
+    folder = tmp_path / "runs" / "toy"
+    cli.main(["run", str(path), "--out", str(folder), "--backend", "serial"])
+    assert len(pd.read_csv(folder / "rows.csv")) == 2 and not (folder / "table.md").exists()
+    cli.main(["run", str(path), "--out", str(folder), "--backend", "serial", "--no-report"])  # resumes: all done
+    with pytest.raises(ValueError, match="names no report: add `report: <module>`"):
+        cli.main(["report", "toy", "--runs", str(tmp_path / "runs"), "--out", str(tmp_path / "results")])

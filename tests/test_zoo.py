@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import glob
+import os
 import runpy
+import subprocess
 import sys
 from pathlib import Path
 
@@ -190,6 +192,38 @@ def test_enjoy_record_without_moviepy_says_so(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "moviepy", None)
     with pytest.raises(SystemExit, match="moviepy not installed: --record needs it, pip install moviepy"):
         cli.enjoy(["--algo", "a2c", "--env", "CartPole-v1", "--record", "-o", "videos"])
+
+
+def test_enjoy_without_pygame_replays_headless_and_names_the_extra(tmp_path, monkeypatch) -> None:
+    """The README's install (the ``zoo`` extra) has no pygame: enjoy replays without a window instead of failing."""
+    monkeypatch.chdir(tmp_path)
+    argv = [
+        "--algo",
+        "twoda2c",
+        "--env",
+        "NomadOffice-v0",
+        "-n",
+        "64",
+        "--eval-freq",
+        "-1",
+        "-f",
+        "logs",
+        "--seed",
+        "1",
+    ]
+    run_script("train.py", [*argv, "--device", "cpu"], monkeypatch)
+    code = (
+        "import sys; sys.modules['pygame'] = None\n"  # import pygame raises ImportError, as when not installed
+        "from sb3_twodrl import cli; cli.enjoy(['--algo', 'twoda2c', '--env', 'NomadOffice-v0', '-n', '20'])"
+    )
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert (
+        'pygame not installed: replaying without a window (--no-render); for one, pip install "sb3-twodrl[render]"'
+        in (done.stderr)
+    )
+    assert "Mean reward" in done.stdout
 
 
 def test_installed_commands_point_at_the_cli() -> None:

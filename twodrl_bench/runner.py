@@ -91,8 +91,8 @@ def run_study(
 
     ``arms``: run only these arms' jobs (the folder's spec still records every arm of ``spec``).
 
-    Each finished job's rows are written at once; at the end ``rows.csv`` collects them and, with
-    ``report``, the study's report (:func:`twodrl_bench.reports.report_study`) reads the run folders.
+    Each finished job's rows are written at once; at the end ``rows.csv`` collects them and, with ``report`` and
+    a spec that names one, the study's report (:func:`twodrl_bench.reports.report_study`) reads the run folders.
     """
     resolved = resolve(validate(spec) if isinstance(spec, dict) else load_spec(spec))
     unknown = sorted(set(arms or []) - set(resolved["arms"]))
@@ -117,8 +117,10 @@ def run_study(
 
     run_jobs(job_function(resolved["protocol"]), jobs, on_done, backend, workers or os.cpu_count() or 1, address)
     collect(folder)
-    if report:
+    if report and resolved["report"] is not None:
         from twodrl_bench.reports import report_run
 
         report_run(folder)
+    elif report:
+        print(f"{folder / 'rows.csv'}: the rows (the spec names no report)")
     return folder

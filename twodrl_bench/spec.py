@@ -7,7 +7,8 @@ A spec is packaged as ``twodrl_bench/specs/<study>.yml`` or, for a study of seve
 (the paper's epochs ``{epochs, learn_episodes, test_episodes}`` or ``{timesteps, eval_episodes}``),
 ``seeds``, ``arms`` (name -> ``{algo, override, settings}``) and/or ``grid`` (points that expand into arms,
 kept in the spec for the report),
-``rules`` (free-form, read by the report) and ``report`` (a module of :mod:`twodrl_bench.reports`).
+``rules`` (free-form, read by the report) and ``report`` (a module of :mod:`twodrl_bench.reports`, or a dotted
+path; optional, default None: the runner writes the rows only).
 
 *Resolving* a spec reads each arm's settings (the env's entry of ``<algo>.yml``, packaged or in the
 arm's ``settings`` folder) and applies its overrides; the resolved spec also records the algorithms'
@@ -108,12 +109,15 @@ def validate(raw: Any, source: str = "spec") -> Spec:
     unknown = sorted(set(spec) - set(FIELDS))
     if unknown:
         raise _fail(source, "fields", f"must be among {list(FIELDS)}", unknown)
-    for key in ("name", "env", "protocol", "seeds", "report"):
+    for key in ("name", "env", "protocol", "seeds"):
         if key not in spec:
             raise ValueError(f"{source}: the field {key!r} is missing")
-    for key in ("name", "env", "report"):
+    for key in ("name", "env"):
         if not isinstance(spec[key], str) or not spec[key]:
             raise _fail(source, key, "must be a non-empty string", spec[key])
+    spec["report"] = spec.get("report")
+    if spec["report"] is not None and (not isinstance(spec["report"], str) or not spec["report"]):
+        raise _fail(source, "report", "must be a non-empty string (a report module) or absent", spec["report"])
     spec["env_kwargs"] = _mapping(source, "env_kwargs", spec.get("env_kwargs") or {})
     packages = spec.get("gym_packages", ["twodrl_envs"])
     if not isinstance(packages, list) or not all(isinstance(p, str) for p in packages):

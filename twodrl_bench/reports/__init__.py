@@ -74,7 +74,16 @@ def report_run(folder: str | Path) -> str:
 
 def report_parts(parts: list[Part], out: Path) -> str:
     """Copy each part's ``spec.yml``, ``rows.csv`` and ``machine.json`` under ``out``, run the parts' report,
-    print its text."""
+    print its text.
+
+    :raises ValueError: if a part's spec names no report, or the parts name different reports
+    """
+    unnamed = [p.name for p in parts if p.spec.get("report") is None]
+    if unnamed:
+        raise ValueError(
+            f"the spec of {', '.join(unnamed)} names no report: add `report: <module>` to it "
+            f"(twodrl_bench.reports.<module> or a dotted path), or read the rows in {parts[0].folder / 'rows.csv'}"
+        )
     names = {p.spec["report"] for p in parts}
     if len(names) != 1:
         raise ValueError(f"the parts name different reports: {sorted(names)}")

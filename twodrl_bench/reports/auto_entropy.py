@@ -7,7 +7,8 @@ Each spec's ``rules`` hold what the verdict reads: ``claim`` (the 2D-RL arm at `
 automatic stock arms; the *reference* is the one with the higher mean return, the first on a tie), ``zero`` (the
 stock arm at 0), ``fixed`` (the stock arm at its best fixed coefficient), ``pairs`` (2D arm -> stock arm, the
 descriptive differences), ``return``/``return_margin``, ``events``/``events_margin`` (row fields and margins) and
-``min_seeds``. The claim holds if the Welch interval of (claim - reference) has its lower bound above
+``min_seeds``. The differences are (claim - each automatic arm), (each other automatic arm - fixed), the pairs and
+(claim - fixed), each once. The claim holds if the Welch interval of (claim - reference) has its lower bound above
 ``-return_margin`` on the return and its upper bound below ``events_margin`` on the events; it is informative only
 if zero is worse than the reference (return interval wholly below 0, or events wholly above 0). With ``learned``
 (``{metric, at_least}``: a run learned if its last epoch's ``metric`` reaches ``at_least``) the claim also needs
@@ -189,7 +190,8 @@ def task_report(part: Part) -> str:
         (arm, rules["fixed"]) for arm in rules["against"] if arm != rules["fixed"]
     ]
     comparisons += [(a, b) for a, b in rules["pairs"].items()]
-    for a, b in comparisons:
+    comparisons.append((rules["claim"], rules["fixed"]))
+    for a, b in dict.fromkeys(comparisons):
         if a in values and b in values:
             ret = _diff(values[a]["return"], values[b]["return"], digits)
             ev = _diff(values[a]["events"], values[b]["events"], 3)
