@@ -3,7 +3,8 @@
 :func:`generate_map` returns a map as the JSON object of the map format (``docs/own_office.md``), made
 deterministically from ``(seed, size)``: the floor is split recursively into rooms (for the larger sizes
 on both sides of a corridor), each split wall gets a door, furniture stands against the walls away from
-the doors, the start is in a corner room and the goal a desk area in a room chosen to fit the size class.
+the doors, the start is in a corner room and the goal the floor in front of a desk (or a corner, where no
+desk fits) in a room chosen to fit the size class.
 The size class is the lattice shortest path (:func:`shortest_path_moves`), see :data:`SIZES`; a layout
 that misses its class, or whose goal or a room the robot cannot reach, is redrawn from a derived seed.
 Every coordinate is a multiple of 10 cm, so the robot's lattice is the 10 cm grid through the origin.
@@ -61,13 +62,13 @@ class _Layout:
     height: tuple[int, int]
     max_room: int
     corridor: float
-    target: int  # estimated shortest path (moves) the goal room is chosen for
+    target: tuple[int, int]  # range of the estimated shortest path (moves) the goal room is chosen for
 
 
 _LAYOUTS = {
-    "S": _Layout((240, 400), (200, 340), 240, 0.0, 18),
-    "M": _Layout((420, 620), (360, 560), 300, 0.5, 55),
-    "L": _Layout((800, MAX_SIDE_CM), (700, MAX_SIDE_CM), 350, 0.8, 135),
+    "S": _Layout((240, 400), (200, 340), 240, 0.0, (14, 24)),
+    "M": _Layout((420, 620), (360, 560), 300, 0.5, (40, 70)),
+    "L": _Layout((800, MAX_SIDE_CM), (700, MAX_SIDE_CM), 350, 0.8, (100, 170)),
 }
 
 
@@ -98,6 +99,7 @@ class _Plan:
     rooms: list[Rect] = field(default_factory=list)
     corridors: list[Rect] = field(default_factory=list)
     furniture: list[Rect] = field(default_factory=list)
+    desk: bool = False
 
     def grid(self, lo: int, hi: int) -> int:
         """A random multiple of the grid in ``[lo, hi]`` (``lo <= hi``, both multiples)."""
@@ -218,10 +220,11 @@ def _draw(rng: np.random.Generator, layout: _Layout) -> tuple[_Plan, dict]:
         _split(plan, floor, layout, force=True)
     start_room = _corner_room(plan)
     start = _start_point(plan, start_room)
-    desk, goal = _place_goal(plan, start_room, start, layout.target)
+    desk, goal = _place_goal(plan, start_room, start, int(rng.integers(layout.target[0], layout.target[1] + 1)))
     keep_clear = [goal, _around(start, 70), *_door_zones(plan)]
     if desk is not None:
         plan.furniture.append(desk)
+        plan.desk = True
     for room in plan.rooms:
         _furnish(plan, room, keep_clear)
     data = {
@@ -470,10 +473,11 @@ def _rooms_reachable(plan: _Plan, lattice: Lattice) -> bool:
 def _describe(plan: _Plan, seed: int, size: str, moves: int, attempt: int) -> str:
     low, high = SIZES[size]
     corridor = ", a corridor" if plan.corridors else ""
+    goal = "the floor in front of a desk" if plan.desk else "a corner"
     return (
         f"Generated office (twodrl_envs.nomad.generator.generate_map({seed}, {size!r}), layout {attempt + 1}): "
-        f"{len(plan.rooms)} rooms{corridor}, {len(plan.doors)} doors, {len(plan.furniture)} pieces of furniture; "
-        f"start in a corner room, goal a desk area in a far room, shortest path {moves} moves (class {size}: "
+        f"{len(plan.rooms)} rooms{corridor}, {len(plan.doors)} doors, {len(plan.furniture)} furniture obstacles; "
+        f"start in a corner room, goal {goal} in a far room, shortest path {moves} moves (class {size}: "
         f"{low}-{high}). All lengths in cm, x east, y north; walls are [x0, y0, x1, y1] segments, obstacles "
         "closed polygons, regions [xmin, ymin, xmax, ymax] rectangles tested on the robot's centre."
     )
