@@ -72,6 +72,11 @@ _LAYOUTS = {
 }
 
 
+def _grid(rng: np.random.Generator, lo: int, hi: int) -> int:
+    """A random multiple of the grid in ``[lo, hi]`` (``lo <= hi``, ``lo`` a multiple)."""
+    return lo + GRID_CM * int(rng.integers(0, (hi - lo) // GRID_CM + 1))
+
+
 @dataclass(frozen=True)
 class _Door:
     """A door in the wall line ``x = coord`` (``vertical``) or ``y = coord``, spanning ``lo`` to ``hi``."""
@@ -102,8 +107,8 @@ class _Plan:
     desk: bool = False
 
     def grid(self, lo: int, hi: int) -> int:
-        """A random multiple of the grid in ``[lo, hi]`` (``lo <= hi``, both multiples)."""
-        return lo + GRID_CM * int(self.rng.integers(0, (hi - lo) // GRID_CM + 1))
+        """A random multiple of the grid in ``[lo, hi]``."""
+        return _grid(self.rng, lo, hi)
 
     def add_wall(self, vertical: bool, coord: int, lo: int, hi: int, door: bool) -> None:
         """A wall line from ``lo`` to ``hi``, with one door of random width and place if ``door``."""
@@ -208,12 +213,12 @@ def generate_map(seed: int, size: str = "M") -> dict:
 
 def _draw(rng: np.random.Generator, layout: _Layout) -> tuple[_Plan, dict]:
     """One random layout: the plan and its map object (name and description still to come)."""
-    plan = _Plan(rng, _grid_in(rng, layout.width), _grid_in(rng, layout.height))
+    plan = _Plan(rng, _grid(rng, *layout.width), _grid(rng, *layout.height))
     floor = (0, 0, plan.width, plan.height)
     for vertical, coord, length in ((False, 0, plan.width), (False, plan.height, plan.width)):
         plan.add_wall(vertical, coord, 0, length, door=False)
-    for coord in (0, plan.width):
-        plan.add_wall(True, coord, 0, plan.height, door=False)
+    for vertical, coord, length in ((True, 0, plan.height), (True, plan.width, plan.height)):
+        plan.add_wall(vertical, coord, 0, length, door=False)
     if rng.random() < layout.corridor:
         _corridor_floor(plan, floor, layout)
     else:
@@ -238,10 +243,6 @@ def _draw(rng: np.random.Generator, layout: _Layout) -> tuple[_Plan, dict]:
         "regions": {"goal": list(goal)},
     }
     return plan, data
-
-
-def _grid_in(rng: np.random.Generator, bounds: tuple[int, int]) -> int:
-    return bounds[0] + GRID_CM * int(rng.integers(0, (bounds[1] - bounds[0]) // GRID_CM + 1))
 
 
 def _corridor_floor(plan: _Plan, floor: Rect, layout: _Layout) -> None:
