@@ -79,7 +79,7 @@ def _number_list(value: object, length: int, what: str, source: str) -> tuple[fl
     return out
 
 
-_MAP_CHOICES = f"a built-in map name ({', '.join(SHIPPED_MAPS)}) or the path of a map JSON file"
+_MAP_CHOICES = f"a built-in map name ({', '.join(SHIPPED_MAPS)}), the path of a map JSON file or 'generated:SIZE:SEED'"
 
 
 GENERATED_PREFIX = "generated:"
@@ -118,7 +118,7 @@ def map_source(path: str | Path | None = None) -> str:
 def map_data(source: str) -> dict:
     """The JSON object of a resolved map source (:func:`map_source`): the file's, or the generated office's."""
     if is_generated(source):
-        from twodrl_envs.nomad.generator import generate_map, parse_generated
+        from twodrl_envs.nomad.generator import generate_map, parse_generated  # the generator builds on this module
 
         size, seed = parse_generated(source)
         return generate_map(seed, size)
