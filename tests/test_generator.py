@@ -46,22 +46,29 @@ def fast(examples: int) -> settings:
     return settings(max_examples=examples, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
 
-@fast(30)
+@fast(25)
 @given(seed=SEEDS)
 def test_small_offices(seed: int) -> None:
     check_office(seed, "S")
 
 
-@fast(12)
+@fast(10)
 @given(seed=SEEDS)
 def test_medium_offices(seed: int) -> None:
     check_office(seed, "M")
 
 
-@fast(3)
+@fast(2)
 @given(seed=SEEDS)
 def test_large_offices(seed: int) -> None:
     check_office(seed, "L")
+
+
+@pytest.mark.slow
+@fast(60)
+@given(seed=SEEDS, size=st.sampled_from(list(SIZES)))
+def test_many_offices(seed: int, size: str) -> None:
+    check_office(seed, size)
 
 
 def test_seeds_and_sizes_give_different_offices() -> None:
