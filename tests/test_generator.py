@@ -10,6 +10,7 @@ import twodrl_envs  # noqa: F401  (registers the IDs)
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from twodrl_envs.memorable.database import record_database, save_database
+from twodrl_envs.nomad import generator
 from twodrl_envs.nomad.dilemma import distance_to_goal
 from twodrl_envs.nomad.generator import SIZES, generate_map, shortest_path_moves
 from twodrl_envs.nomad.geometry import (
@@ -90,6 +91,12 @@ def test_seeds_and_sizes_give_different_offices() -> None:
 def test_bad_seed_or_size(args: tuple, error: type, message: str) -> None:
     with pytest.raises(error, match=message):
         generate_map(*args)
+
+
+def test_gives_up_after_its_attempts(monkeypatch) -> None:
+    monkeypatch.setattr(generator, "MAX_ATTEMPTS", 0)
+    with pytest.raises(RuntimeError, match=r"generate_map\(3, 'L'\): no layout of 0 landed in class L"):
+        generate_map(3, "L")
 
 
 @pytest.mark.parametrize("name", SHIPPED_MAPS)

@@ -353,11 +353,11 @@ def _place_goal(plan: _Plan, start_room: Rect, start: tuple[int, int], target: i
         doors = [i for i, d in enumerate(plan.doors) if _on_boundary(d, room)]
         if room == start_room or not doors:
             continue
-        entry = plan.doors[min(doors, key=lambda i: dist[i])]
-        desk, goal = _goal_desk(plan, room, entry, start)
-        x, y = entry.centre
+        entry = min(doors, key=lambda i: dist[i])
+        desk, goal = _goal_desk(plan, room, plan.doors[entry], start)
+        x, y = plan.doors[entry].centre
         nearest = (min(max(x, goal[0]), goal[2]), min(max(y, goal[1]), goal[3]))
-        miss = abs((min(dist[i] for i in doors) + _manhattan(entry.centre, nearest)) / GRID_CM - target)
+        miss = abs((dist[entry] + _manhattan((x, y), nearest)) / GRID_CM - target)
         if best is None or miss < best[0]:
             best = (miss, desk, goal)
     assert best is not None  # every floor is split at least once
