@@ -11,7 +11,8 @@ Importing this package registers:
   takes), kept so results can be shown on both maps.
 
 Every ID takes ``map=``: a built-in map (``"office"``, ``"open"``, ``"corridor"``: one route, no route
-regions) or a map file (docs/own_office.md). Every ID has a ``vector_entry_point``, its batched env
+regions), a map file (docs/own_office.md) or a generated office (``"generated:SIZE:SEED"``,
+``twodrl_envs.nomad.generator``). Every ID has a ``vector_entry_point``, its batched env
 (``gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point", **options)``), which takes every
 option of ``gym.make(id, **options)``: sub-env ``i`` behaves exactly like ``gym.make(id, **options)`` (tested).
 

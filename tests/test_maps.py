@@ -69,7 +69,7 @@ def test_route_regions_come_as_a_pair(tmp_path):
 
 @pytest.mark.parametrize("bad", ["", " "])
 def test_empty_map_path_names_map_and_the_builtin_maps(bad):
-    expected = r"map must be a built-in map name \(office, open, corridor\) or the path of a map JSON file"
+    expected = r"map must be a built-in map name \(office, open, corridor\), the path of a map JSON file or 'generated"
     with pytest.raises(ValueError, match=expected):
         gym.make("NomadOffice-v0", map=bad)
     with pytest.raises(ValueError, match=expected):

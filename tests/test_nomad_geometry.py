@@ -101,6 +101,24 @@ def test_missing_and_malformed_map_files(tmp_path):
         load_map(42)
 
 
+def test_misspelt_key_is_named_with_the_allowed_ones(tmp_path):
+    data = json.loads(open(OFFICE.source).read())
+    data["wals"] = data.pop("walls")
+    bad = tmp_path / "typo.json"
+    bad.write_text(json.dumps(data))
+    with pytest.raises(ValueError, match=r"missing keys \['walls'\]; unknown keys \['wals'\] \(allowed: name, "):
+        load_map(bad)
+    region = write_map(tmp_path, regions={"gaol": [220, 0, 290, 305], "goal": [220, 0, 290, 305]})
+    with pytest.raises(ValueError, match=r"unknown keys \['regions.gaol'\] \(allowed: regions.goal, "):
+        load_map(region)
+
+
+def test_goal_outside_the_bounds_says_so(tmp_path):
+    path = write_map(tmp_path, regions={"goal": [300, 0, 400, 305]})
+    with pytest.raises(ValueError, match=r"regions.goal \[300.0, 0.0, 400.0, 305.0\] lies outside the bounds \[0"):
+        load_map(path)
+
+
 def test_office_core_is_cached_per_file_version(tmp_path):
     path = write_map(tmp_path)
     first = office_core(path)

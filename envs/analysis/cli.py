@@ -60,7 +60,9 @@ def main(argv: list[str] | None = None) -> None:
         prog="sb3-twodrl-record-database", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument(
-        "--map", default=None, help=f"built-in map name ({', '.join(SHIPPED_MAPS)}) or map JSON file (default: office)"
+        "--map",
+        default=None,
+        help=f"built-in map name ({', '.join(SHIPPED_MAPS)}), map JSON file or generated:SIZE:SEED (default: office)",
     )
     parser.add_argument("--check", action="store_true", help="check the map and describe it; record nothing")
     parser.add_argument("--out", type=Path, default=None, help="output .npz (required unless --check)")

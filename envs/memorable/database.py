@@ -21,7 +21,7 @@ import numpy as np
 
 from twodrl_envs.nomad import sensors
 from twodrl_envs.nomad.core import OfficeCore, office_core
-from twodrl_envs.nomad.geometry import ROBOT_RADIUS_CM, SHIPPED_MAPS, STEP_CM, OfficeMap, map_source
+from twodrl_envs.nomad.geometry import ROBOT_RADIUS_CM, SHIPPED_MAPS, STEP_CM, OfficeMap, map_data, map_source
 from twodrl_envs.nomad.sensors import HIGH_CM, LOW_CM
 
 SCHEMA_VERSION = 1
@@ -58,8 +58,9 @@ def _floats(value: Any) -> Any:
 
 
 def map_fingerprint(office: OfficeMap) -> tuple[str, str]:
-    """Canonical JSON text of a map file and its SHA-256 (whitespace, key order, 1 vs 1.0 do not matter)."""
-    data = _floats(json.loads(Path(office.source).read_text()))
+    """Canonical JSON text of a map (file or generated) and its SHA-256 (whitespace, key order, 1 vs 1.0 do not
+    matter)."""
+    data = _floats(map_data(office.source))
     text = json.dumps(data, sort_keys=True, separators=(",", ":"))
     return text, hashlib.sha256(text.encode()).hexdigest()
 

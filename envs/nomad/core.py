@@ -31,6 +31,7 @@ from twodrl_envs.nomad.geometry import (
     OfficeMap,
     build_lattice,
     check_goal_reachable,
+    is_generated,
     load_map,
     map_source,
     swept_clearance,
@@ -101,15 +102,17 @@ def _core(source: str, mtime_ns: int) -> OfficeCore:
 
 
 def office_core(map_path: str | Path | None = None) -> OfficeCore:
-    """The (cached) :class:`OfficeCore` of a map file; ``None`` is the shipped office.
+    """The (cached) :class:`OfficeCore` of a map file; ``None`` is the shipped office, ``"generated:SIZE:SEED"``
+    a generated one (:mod:`twodrl_envs.nomad.generator`).
 
     Every env loads its map here: the file is validated (:func:`~twodrl_envs.nomad.geometry.load_map`) and
     its goal must be reachable from the start on the lattice
     (:func:`~twodrl_envs.nomad.geometry.check_goal_reachable`), else ``ValueError``.
     """
-    source = Path(map_source(map_path))
-    # A missing file gets its error from load_map, uncached
-    return _core(str(source), source.stat().st_mtime_ns if source.exists() else -1)
+    source = map_source(map_path)
+    # A generated office never changes; a missing file gets its error from load_map, uncached
+    version = -1 if is_generated(source) or not Path(source).exists() else Path(source).stat().st_mtime_ns
+    return _core(source, version)
 
 
 # --- evaluations (eq. 11-12) ----------------------------------------------------------------

@@ -79,29 +79,49 @@ def _number_list(value: object, length: int, what: str, source: str) -> tuple[fl
     return out
 
 
-_MAP_CHOICES = f"a built-in map name ({', '.join(SHIPPED_MAPS)}) or the path of a map JSON file"
+_MAP_CHOICES = f"a built-in map name ({', '.join(SHIPPED_MAPS)}), the path of a map JSON file or 'generated:SIZE:SEED'"
+
+
+GENERATED_PREFIX = "generated:"
+"""A map source ``generated:SEED`` or ``generated:SIZE:SEED`` is an office made by
+:func:`twodrl_envs.nomad.generator.generate_map` (size ``M`` when omitted), not a file."""
+MAP_KEYS = ("name", "description", "units", "bounds", "walls", "obstacles", "start", "regions")
+REGION_KEYS = ("goal", *ROUTE_REGIONS)
+
+
+def is_generated(source: str) -> bool:
+    """Whether a resolved map source (:func:`map_source`) names a generated office rather than a file."""
+    return source.startswith(GENERATED_PREFIX)
 
 
 def map_source(path: str | Path | None = None) -> str:
-    """The resolved path of a map file; ``None`` is the shipped office, a name in ``SHIPPED_MAPS`` a shipped map."""
+    """The resolved path of a map file; ``None`` is the shipped office, a name in ``SHIPPED_MAPS`` a shipped map.
+
+    ``"generated:SEED"`` and ``"generated:SIZE:SEED"`` resolve to the canonical ``generated:SIZE:SEED``.
+    """
     if path is not None and not isinstance(path, str | Path):
         raise TypeError(f"map must be a path (str or pathlib.Path) or None, got {type(path).__name__}: {path!r}")
     if path is None:
         path = default_map_path()
     elif isinstance(path, str) and path in SHIPPED_MAPS:
         path = MAPS_DIR / f"{path}.json"
+    elif isinstance(path, str) and is_generated(path):
+        from twodrl_envs.nomad.generator import parse_generated  # the generator builds on this module
+
+        size, seed = parse_generated(path)
+        return f"{GENERATED_PREFIX}{size}:{seed}"
     elif str(path).strip() == "":
         raise ValueError(f"map must be {_MAP_CHOICES}, got {path!r}")
     return str(Path(path).resolve())
 
 
-def load_map(path: str | Path | None = None) -> OfficeMap:
-    """Read and validate a map file (format documented in ``docs/nomad.md``); ``None`` loads the office,
-    ``"office"`` / ``"open"`` a shipped map by name.
+def map_data(source: str) -> dict:
+    """The JSON object of a resolved map source (:func:`map_source`): the file's, or the generated office's."""
+    if is_generated(source):
+        from twodrl_envs.nomad.generator import generate_map, parse_generated  # the generator builds on this module
 
-    Raises ``ValueError`` naming the file and the offending entry.
-    """
-    source = map_source(path)
+        size, seed = parse_generated(source)
+        return generate_map(seed, size)
     if not Path(source).is_file():
         what = "is a directory" if Path(source).is_dir() else "does not exist"
         raise ValueError(f"map file {source} {what} (map must be {_MAP_CHOICES})")
@@ -111,9 +131,43 @@ def load_map(path: str | Path | None = None) -> OfficeMap:
         raise ValueError(f"map file {source} is not valid JSON: {err}") from err
     if not isinstance(data, dict):
         raise ValueError(f"map file {source}: top level must be an object, got {type(data).__name__}")
-    missing = [key for key in ("bounds", "walls", "start", "regions") if key not in data]
-    if missing:
-        raise ValueError(f"map file {source}: missing keys {missing}")
+    return data
+
+
+def load_map(path: str | Path | None = None) -> OfficeMap:
+    """Read and validate a map file (format documented in ``docs/nomad.md``); ``None`` loads the office,
+    ``"office"`` / ``"open"`` a shipped map by name, ``"generated:SIZE:SEED"`` a generated office.
+
+    Raises ``ValueError`` naming the file and the offending entry.
+    """
+    source = map_source(path)
+    return parse_map(map_data(source), source)
+
+
+def _check_keys(data: dict, required: tuple[str, ...], allowed: tuple[str, ...], where: str, source: str) -> None:
+    """``ValueError`` naming the missing and the unknown keys of an object (``where``: e.g. ``"regions."``)."""
+    missing = [where + key for key in required if key not in data]
+    unknown = [where + str(key) for key in data if key not in allowed]
+    problems = [f"missing keys {missing}"] if missing else []
+    if unknown:
+        problems.append(f"unknown keys {unknown} (allowed: {', '.join(where + key for key in allowed)})")
+    if problems:
+        raise ValueError(f"map file {source}: {'; '.join(problems)}")
+
+
+def _overlaps(rect: tuple[float, ...], bounds: tuple[float, ...]) -> bool:
+    return rect[0] <= bounds[2] and rect[2] >= bounds[0] and rect[1] <= bounds[3] and rect[3] >= bounds[1]
+
+
+def parse_map(data: dict, source: str) -> OfficeMap:
+    """Validate a map's JSON object (the format of ``docs/own_office.md``) into an :class:`OfficeMap`.
+
+    ``source`` names the map in messages and in the result. Raises ``ValueError`` naming the source and
+    the offending entry.
+    """
+    if not isinstance(data, dict):
+        raise TypeError(f"data must be a dict (a map's JSON object), got {type(data).__name__}")
+    _check_keys(data, ("bounds", "walls", "start", "regions"), MAP_KEYS, "", source)
     if data.get("units", "cm") != "cm":
         raise ValueError(f"map file {source}: units must be 'cm', got {data['units']!r}")
     bounds = _number_list(data["bounds"], 4, "bounds", source)
@@ -137,8 +191,7 @@ def load_map(path: str | Path | None = None) -> OfficeMap:
     start = _number_list(data["start"], 2, "start", source)
     if not isinstance(data["regions"], dict):
         raise ValueError(f"map file {source}: regions must be an object, got {data['regions']!r}")
-    if "goal" not in data["regions"]:
-        raise ValueError(f"map file {source}: regions.goal is missing")
+    _check_keys(data["regions"], ("goal",), REGION_KEYS, "regions.", source)
     given = [name for name in ROUTE_REGIONS if name in data["regions"]]
     if len(given) == 1:
         other = ROUTE_REGIONS[1 - ROUTE_REGIONS.index(given[0])]
@@ -151,6 +204,8 @@ def load_map(path: str | Path | None = None) -> OfficeMap:
         rect = _number_list(data["regions"][name], 4, f"regions.{name}", source)
         if not (rect[0] <= rect[2] and rect[1] <= rect[3]):
             raise ValueError(f"map file {source}: regions.{name} must be [xmin, ymin, xmax, ymax], got {rect}")
+        if not _overlaps(rect, bounds):
+            raise ValueError(f"map file {source}: regions.{name} {list(rect)} lies outside the bounds {list(bounds)}")
         regions[name] = rect  # type: ignore[assignment]
     office = OfficeMap(str(data.get("name", Path(source).stem)), bounds, walls, start, regions, source)  # type: ignore[arg-type]
     start_xy = np.array(start)
