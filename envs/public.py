@@ -100,7 +100,7 @@ class LavaSplit(gym.Wrapper):
 
     def step(self, action: Any) -> tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]:
         obs, reward, terminated, truncated, info = self.env.step(action)
-        base = self.env.unwrapped
+        base: Any = self.env.unwrapped  # a MiniGrid env: its grid and the agent's position
         cell = base.grid.get(*base.agent_pos)
         lava = int(terminated and cell is not None and cell.type == "lava")
         return obs, float(reward) - lava, terminated, truncated, {**info, "punishment": float(lava), "lava": lava}

@@ -7,6 +7,7 @@ from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 from twodrl_envs import MAX_EPISODE_STEPS
+from twodrl_envs.nomad.core import office_core
 
 IDS = ["twodrl_envs:NomadOffice-v0", "twodrl_envs:NomadOfficeReal-v0"]
 N, E, S, W = 0, 1, 2, 3
@@ -205,3 +206,23 @@ def test_exploring_starts_draw_reachable_cells_outside_the_goal(env_id):
 def test_exploring_starts_refuse_an_unknown_value():
     with pytest.raises(ValueError, match="starts must be one of"):
         gym.make("NomadOffice-v0", starts="random")
+
+
+def test_the_raw_input_stage_gives_the_envs_observation():
+    """:class:`RawObservation` on ranges (cm) and positions (cm) equals the env's observation, bit for bit."""
+    import torch as th
+
+    from twodrl_envs.nomad.deploy import RawObservation
+    from twodrl_envs.nomad.realistic import RealisticModel
+
+    core = office_core("generated:M:3")
+    raw = np.concatenate([core.ranges, core.lattice.cells], axis=1)
+    expected = np.concatenate([core.readings, core.cell_odometry], axis=1)
+    np.testing.assert_array_equal(RawObservation("generated:M:3")(th.as_tensor(raw)).numpy(), expected)
+    without = RawObservation("generated:M:3", observe_odometry=False)(th.as_tensor(core.ranges)).numpy()
+    np.testing.assert_array_equal(without, core.readings)
+    scene = RealisticModel().scene(core.office)  # the stand-in robot's saturated readings, off the lattice
+    poses = core.lattice.cells[:50] + 3.3
+    keys, steps = np.arange(50, dtype=np.uint64), np.ones(50, dtype=np.int64)
+    got = RawObservation("generated:M:3", observe_odometry=False)(th.as_tensor(scene.ranges(poses, keys, steps)))
+    np.testing.assert_array_equal(got.numpy(), scene.readings(poses, keys, steps))

@@ -184,11 +184,11 @@ def measure(core: OfficeCore, time_limit: int, eps_grid: np.ndarray | None = Non
         out[f"{route}_collisions_per_step"] = hazard[route]
     walk = wall_avoiding_policy(core)
     out["avoider_return"] = expected_return(core, walk, time_limit)
-    reached = goal_probabilities(core, walk, (time_limit, 2 * time_limit))
+    by_limit = goal_probabilities(core, walk, (time_limit, 2 * time_limit))
     for limit, tag in ((time_limit, "limit"), (2 * time_limit, "2limit")):
         for route, c in ROUTE_CODES.items():
-            out[f"avoider_goal_{route}_{tag}"] = float(reached[limit][c])
-        out[f"avoider_goal_{tag}"] = float(reached[limit].sum())
+            out[f"avoider_goal_{route}_{tag}"] = float(by_limit[limit][c])
+        out[f"avoider_goal_{tag}"] = float(by_limit[limit].sum())
     out["avoider_mean_steps"] = mean_episode_length(core, walk, time_limit)
     out["random_mean_steps"] = mean_episode_length(core, np.full((len(walk), 4), 0.25), time_limit)
     return out

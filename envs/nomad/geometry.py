@@ -67,8 +67,11 @@ def default_map_path() -> Path:
 
 
 def _number_list(value: object, length: int, what: str, source: str) -> tuple[float, ...]:
-    numbers = isinstance(value, list) and all(isinstance(v, int | float) and not isinstance(v, bool) for v in value)
-    if not numbers or len(value) != length:
+    if (
+        not isinstance(value, list)
+        or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in value)
+        or len(value) != length
+    ):
         raise ValueError(f"map file {source}: {what} must be a list of {length} numbers, got {value!r}")
     try:
         out = tuple(float(v) for v in value)
