@@ -4,7 +4,8 @@ For each map (generated offices by seed and size class, or map files), each algo
 ``NomadOffice-v0`` hyperparameters and the settings :func:`twodrl_envs.nomad.settings.map_settings` derives
 (exploring starts, discount, time limit, budget), on the batched env. Every ``--eval-every`` steps it runs 20
 deterministic episodes from the map's start; it stops at a goal rate >= 0.8 (learned) or at the budget. Printed
-and written as CSV: shortest path, training seconds and steps to learn (evaluation time excluded), final goal rate.
+and written as CSV: shortest path, training seconds (wall and this process's CPU, one torch thread) and steps to
+learn (evaluation time excluded), final goal rate.
 
     OMP_NUM_THREADS=1 python scripts/bench_offices.py --sizes S M L --seeds 1000 1001 --algos twoda2c a2c
 """
@@ -32,6 +33,7 @@ from twodrl_envs.nomad.settings import map_settings
 ALGOS = {"twoda2c": TwoDimA2C, "a2c": A2C}
 ENV = "NomadOffice-v0"
 TEST_EPISODES = 20
+FIELDS = ("map", "size", "moves", "algo", "seed", "learned", "train_s", "train_cpu_s", "steps", "goal_rate", "budget")
 
 
 def goal_rate(model: A2C, test_env: object, steps: int) -> float:
@@ -56,19 +58,24 @@ class LearnedStop(BaseCallback):
     def __init__(self, test_env: object, every: int, limit: int) -> None:
         super().__init__()
         self.test_env, self.every, self.limit = test_env, every, limit
-        self.train_s, self.rate, self.learned_steps = 0.0, 0.0, -1
-        self._next, self._since = every, 0.0
+        self.train_s, self.train_cpu_s, self.rate, self.learned_steps = 0.0, 0.0, 0.0, -1
+        self._next, self._since, self._cpu_since = every, 0.0, 0.0
 
     def _on_training_start(self) -> None:
-        self._since = time.perf_counter()
+        self._since, self._cpu_since = time.perf_counter(), time.process_time()
+
+    def pause(self) -> None:
+        """Add the time since the last resume to the training time."""
+        self.train_s += time.perf_counter() - self._since
+        self.train_cpu_s += time.process_time() - self._cpu_since
 
     def _on_step(self) -> bool:
         if self.num_timesteps < self._next:
             return True
         self._next += self.every
-        self.train_s += time.perf_counter() - self._since
+        self.pause()
         self.rate = goal_rate(self.model, self.test_env, self.limit)
-        self._since = time.perf_counter()
+        self._on_training_start()
         if self.rate >= 0.8:
             self.learned_steps = self.num_timesteps
             return False
@@ -87,7 +94,7 @@ def run(algo: str, map_: str, seed: int, eval_every: int) -> dict[str, object]:
     stop = LearnedStop(test_env, eval_every, settings.max_episode_steps)
     model.learn(settings.n_timesteps, callback=stop)
     if stop.learned_steps < 0:  # the budget ran out between evaluations: one last one
-        stop.train_s += time.perf_counter() - stop._since
+        stop.pause()
         stop.rate = goal_rate(model, test_env, settings.max_episode_steps)
     return {
         "map": map_,
@@ -97,10 +104,52 @@ def run(algo: str, map_: str, seed: int, eval_every: int) -> dict[str, object]:
         "seed": seed,
         "learned": stop.rate >= 0.8,
         "train_s": round(stop.train_s, 1),
+        "train_cpu_s": round(stop.train_cpu_s, 1),
         "steps": stop.learned_steps if stop.learned_steps >= 0 else model.num_timesteps,
         "goal_rate": stop.rate,
         "budget": settings.n_timesteps,
     }
+
+
+def wilson(k: int, n: int) -> tuple[float, float]:
+    """95% Wilson interval of ``k`` successes in ``n``."""
+    z, p = 1.959964, k / n
+    centre, half = p + z * z / (2 * n), z * ((p * (1 - p) + z * z / (4 * n)) / n) ** 0.5
+    return (centre - half) / (1 + z * z / n), (centre + half) / (1 + z * z / n)
+
+
+def table(rows: list[dict[str, str]]) -> str:
+    """Markdown: per size and algorithm, maps learned (Wilson) and the training CPU time and steps of those that
+    learned (median, largest); then every map, by shortest path."""
+    lines = [
+        "| size | algo | maps learned | 95% interval | CPU s to learn, median (max) | steps to learn, median (max) |",
+        "| --- | --- | --- | --- | --- | --- |",
+    ]
+    for size in ("S", "M", "L", "XL"):
+        for algo in sorted({r["algo"] for r in rows}, reverse=True):
+            group = [r for r in rows if r["size"] == size and r["algo"] == algo]
+            if not group:
+                continue
+            learned = [r for r in group if r["learned"] == "True"]
+            low, high = wilson(len(learned), len(group))
+            cpu = sorted(float(r["train_cpu_s"]) for r in learned)
+            steps = sorted(int(r["steps"]) for r in learned)
+            times = f"{np.median(cpu):.0f} ({cpu[-1]:.0f})" if cpu else "-"
+            counts = f"{np.median(steps):,.0f} ({steps[-1]:,})" if steps else "-"
+            lines.append(
+                f"| {size} | {algo} | {len(learned)}/{len(group)} | [{low:.2f}, {high:.2f}] | {times} | {counts} |"
+            )
+    lines += [
+        "",
+        "| map | moves | algo | learned | CPU s | steps | goal rate | budget |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    for r in sorted(rows, key=lambda r: (int(r["moves"]), r["map"], r["algo"])):
+        lines.append(
+            f"| {r['map']} | {r['moves']} | {r['algo']} | {r['learned']} | {r['train_cpu_s']} | {r['steps']} | "
+            f"{float(r['goal_rate']):.2f} | {r['budget']} |"
+        )
+    return "\n".join(lines) + "\n"
 
 
 def main() -> None:
@@ -112,10 +161,27 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0, help="training seed")
     parser.add_argument("--eval-every", type=int, default=100_000)
     parser.add_argument("--out", type=Path, default=None, help="CSV to append rows to")
+    parser.add_argument("--table", type=Path, default=None, help="print the markdown table of a rows CSV and exit")
     args = parser.parse_args()
+    if args.table is not None:
+        with args.table.open(newline="") as f:
+            print(table(list(csv.DictReader(f))), end="")
+        return
     th.set_num_threads(1)
     maps = list(args.maps) + [f"generated:{size}:{seed}" for size in args.sizes for seed in args.map_seeds]
-    fields = ["map", "size", "moves", "algo", "seed", "learned", "train_s", "steps", "goal_rate", "budget"]
+    fields = [
+        "map",
+        "size",
+        "moves",
+        "algo",
+        "seed",
+        "learned",
+        "train_s",
+        "train_cpu_s",
+        "steps",
+        "goal_rate",
+        "budget",
+    ]
     print(" | ".join(fields))
     for map_ in maps:
         office_core(map_)  # a bad map fails before any training
