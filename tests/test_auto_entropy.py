@@ -251,13 +251,21 @@ def test_an_epoch_runs_rows_carry_the_coefficient_of_a_learned_one_only(tmp_path
     """The paper's epochs (no set budget): each row holds the last update's alpha and entropy fraction."""
     import twodrl_envs  # noqa: F401  (registers the IDs)
 
-    from twodrl_bench import RunSpec, run_pair
+    from twodrl_bench import Experiment, run_job
 
     hp = {"n_envs": 4, "gamma": 0.9, "n_steps": 5}
-    common = dict(epochs=2, learn_episodes=4, test_episodes=2, out_dir=str(tmp_path), gym_packages=["twodrl_envs"])
     auto = {**hp, "ent_coef": "auto", "target_entropy_fraction": 0.5, "ent_coef_lr": 0.01}
-    rows = run_pair(RunSpec("NomadOffice-v0", "a2c_auto", 3, hyperparams=auto, tensorboard=False, **common))
+    spec = {
+        "name": "auto",
+        "env": "NomadOffice-v0",
+        "protocol": {"epochs": 2, "learn_episodes": 4, "test_episodes": 2, "tensorboard": False},
+        "seeds": [3],
+        "arms": {"auto": {"algo": "a2c_auto", "override": auto}, "stock": {"algo": "a2c", "override": hp}},
+        "report": "paper",
+    }
+    auto_job, stock_job = Experiment.from_spec(spec).jobs(tmp_path)
+    rows = run_job(auto_job)
     assert [row["ent_coef"] < 1.0 for row in rows] == [True, True]  # a fresh actor is above half the maximum
     assert rows[1]["ent_coef"] < rows[0]["ent_coef"] and all(0.5 < row["entropy_fraction"] <= 1 for row in rows)
-    stock = run_pair(RunSpec("NomadOffice-v0", "a2c", 3, hyperparams=hp, tensorboard=False, **common))
+    stock = run_job(stock_job)
     assert "ent_coef" not in stock[0] and "entropy_fraction" not in stock[0]

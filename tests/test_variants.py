@@ -14,7 +14,7 @@ from sb3_twodrl.common.policies import TEMPERATURE_ARGUMENTS
 from tests.test_sb3_contract import policy_save_load, strip_format
 from tests.toy_envs import LatticeCorridor
 from twodrl_bench.algos import algo_class
-from twodrl_bench.protocol import settings_algo
+from twodrl_bench.experiment import settings_algo
 from twodrl_bench.runner import run_study
 from twodrl_bench.spec import load_spec
 from twodrl_bench.variants import VARIANT_ARGUMENTS, VariantActorCriticPolicy, VariantTwoDimA2C, VariantTwoDimPPO
