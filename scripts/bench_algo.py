@@ -5,7 +5,7 @@
 Each pair trains on the same env id, n_envs, seed and stock arguments (the algorithms' defaults) in this
 process (DummyVecEnv, one torch thread). ``a2c``/``ppo`` pair the 2D-RL algorithm with stock SB3 (what
 a user sees); ``a2c-fast``/``ppo-fast`` with the bench's stock arms, SB3's numbers on the same fast
-path as the 2D-RL algorithms (``twodrl_bench.baselines``): the cost of the 2D parts alone;
+path as the 2D-RL algorithms (``twodrl_bench.algorithms.baselines``): the cost of the 2D parts alone;
 ``a2c-layer``/``ppo-layer`` the 2D-RL algorithm on the library's speed layer against itself with the layer
 switched off (SB3's module calls, SB3's ``CategoricalDistribution``, a per-parameter optimizer, numpy's
 statistics; the same parameters bit for bit, ``tests/test_fast.py``): the layer's gain; ``a2c-infos`` the
@@ -36,7 +36,7 @@ import sb3_twodrl.common.fast as fast
 import sb3_twodrl.common.on_policy as on_policy
 import sb3_twodrl.common.policies as policies
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
-from twodrl_bench.baselines import BatchedA2C, BatchedPPO
+from twodrl_bench.algorithms.baselines import BatchedA2C, BatchedPPO
 from twodrl_bench.vec_env import make_train_env
 
 PAIRS: dict[str, tuple[type[BaseAlgorithm], type[BaseAlgorithm]]] = {

@@ -2,7 +2,7 @@
 """Throughput of the paper's protocol, both arms measured side by side in one run (targets: docs/benchmarks.md).
 
 For each n_envs: one (algo, seed) run per arm (``a2c`` is SB3's A2C on the experiments' fast path,
-:mod:`twodrl_bench.baselines`) of ``--epochs`` paper-sized epochs (K learning
+:mod:`twodrl_bench.algorithms.baselines`) of ``--epochs`` paper-sized epochs (K learning
 trials, then M test trials, batched pipeline, exactly as :mod:`twodrl_bench.epochs` runs them; no
 TensorBoard, checkpoints or models), timed by the process's CPU time (the machine is shared).
 Prints learning env-steps per CPU second (target >= 100,000), TwoDimA2C / A2C (target >= 0.9),

@@ -17,7 +17,7 @@ from gymnasium.wrappers import TimeLimit
 from stable_baselines3.common.env_util import make_vec_env
 
 from tests.toy_envs import LatticeCorridor
-from twodrl_bench.variants import VariantTwoDimA2C as TwoDimA2C  # the interest modes are variants
+from twodrl_bench.algorithms.variants import VariantTwoDimA2C as TwoDimA2C  # the interest modes are variants
 
 SETTINGS = {
     "paper (eq. 9), raw": {"interest": "paper"},

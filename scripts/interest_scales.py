@@ -21,8 +21,8 @@ from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.env_util import make_vec_env
 from twodrl_envs.nomad.batched import make_sb3_vec_env
 
-from twodrl_bench.variants import INTEREST_MODES, PREFERENCE_MODES
-from twodrl_bench.variants import VariantTwoDimA2C as TwoDimA2C  # the interest modes are variants
+from twodrl_bench.algorithms.variants import INTEREST_MODES, PREFERENCE_MODES
+from twodrl_bench.algorithms.variants import VariantTwoDimA2C as TwoDimA2C  # the interest modes are variants
 
 
 class Scales(BaseCallback):

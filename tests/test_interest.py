@@ -11,7 +11,7 @@ from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_twodrl import TwoDimA2C
 from tests.toy_envs import LatticeCorridor
-from twodrl_bench.variants import INTEREST_MODES, VariantTwoDimA2C, scored_actions
+from twodrl_bench.algorithms.variants import INTEREST_MODES, VariantTwoDimA2C, scored_actions
 
 WEST = 3  # LatticeCorridor's move into the wall at the start
 

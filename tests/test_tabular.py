@@ -23,7 +23,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 from twodrl_envs.nomad.office import GOAL_REWARD
 
 from tests.tabular_oracle import TabularActorCritic
-from twodrl_bench.variants import VariantTwoDimA2C
+from twodrl_bench.algorithms.variants import VariantTwoDimA2C
 
 N_STEPS = 1000
 TOLERANCE = 1e-6

@@ -9,7 +9,8 @@
   evaluation);
 - :mod:`.reports`: what a study's rows say (tables, figures);
 - :mod:`.cli`: ``sb3-twodrl-bench run | report | status``;
-- shared machinery: :mod:`.protocol` (CSV columns, trial seeds), :mod:`.algos` (algorithm names),
+- :mod:`.algorithms`: the bench's algorithms (stock arms on the fast path, variants, self-tuning entropy) by name;
+- shared machinery: :mod:`.protocol` (CSV columns, trial seeds),
   :mod:`.vec_env` (batched VecEnvs), :mod:`.trials` (an epoch's test trials), :mod:`.checkpoint`,
   :mod:`.intervals`, :mod:`.plots`.
 
@@ -20,7 +21,7 @@ from twodrl_bench.machine import use_reproducible_kernels
 
 use_reproducible_kernels()  # before any module below runs a torch kernel
 
-from twodrl_bench.algos import ALGOS, algo_class  # noqa: E402
+from twodrl_bench.algorithms import ALGOS, algo_class  # noqa: E402
 from twodrl_bench.experiment import Experiment, Job  # noqa: E402
 from twodrl_bench.jobs import run as run_job  # noqa: E402
 from twodrl_bench.protocol import COLUMNS, METRICS  # noqa: E402

@@ -38,7 +38,7 @@ from stable_baselines3.common.vec_env import VecEnv
 from sb3_twodrl.callbacks import NavigationMetricsCallback
 from sb3_twodrl.hyperparams import evaluate
 from twodrl_bench import jobs
-from twodrl_bench.algos import algo_class
+from twodrl_bench.algorithms import algo_class
 from twodrl_bench.checkpoint import set_rng_state
 from twodrl_bench.experiment import Job
 from twodrl_bench.protocol import LEARNING, METRICS, trial_seed
@@ -127,7 +127,7 @@ class EpochCallback(BaseCallback):
 
 
 def coefficient_columns(model: BaseAlgorithm) -> dict[str, float]:
-    """For a learned entropy coefficient (:mod:`twodrl_bench.auto_entropy`): ``ent_coef`` and
+    """For a learned entropy coefficient (:mod:`twodrl_bench.algorithms.auto_entropy`): ``ent_coef`` and
     ``entropy_fraction`` of the last update; none for a fixed coefficient."""
     if not getattr(model, "ent_coef_auto", False):
         return {}

@@ -215,16 +215,30 @@ def check_constants(hyperparams: dict[str, Any], where: str) -> None:
             raise ValueError(f"{where}: {key} is a schedule ({value!r}); the epoch protocol takes constants")
 
 
-def class_defaults(algo: str, hyperparams: dict[str, Any]) -> dict[str, str]:
-    """The constructor defaults of ``algo``'s class that ``hyperparams`` leave in force, as ``repr``:
-    a run resumed after a default changed (a new release) is then refused, not mixed."""
-    from twodrl_bench.algos import algo_class
+def constructor_defaults(cls: type) -> dict[str, Any]:
+    """The default of every constructor argument of ``cls``: its ``__init__``'s, then, while an ``__init__`` passes
+    ``**kwargs`` on, those of the next class of the MRO that defines one (a subclass's default wins)."""
+    out: dict[str, Any] = {}
+    for klass in cls.__mro__:
+        if "__init__" not in vars(klass) or klass is object:
+            continue
+        parameters = inspect.signature(vars(klass)["__init__"]).parameters.values()
+        for p in parameters:
+            if p.default is not p.empty:
+                out.setdefault(p.name, p.default)
+        if not any(p.kind is p.VAR_KEYWORD for p in parameters):
+            break
+    return out
 
-    parameters = inspect.signature(algo_class(algo).__init__).parameters.values()
+
+def class_defaults(algo: str, hyperparams: dict[str, Any]) -> dict[str, str]:
+    """The constructor defaults of ``algo``'s class (:func:`constructor_defaults`) that ``hyperparams`` leave in
+    force, as ``repr``: a run resumed after a default changed (a new release) is then refused, not mixed."""
+    from twodrl_bench.algorithms import algo_class
+
+    defaults = constructor_defaults(algo_class(algo))
     return {
-        p.name: repr(p.default)
-        for p in parameters
-        if p.default is not p.empty and p.name not in _NOT_SETTINGS and p.name not in hyperparams
+        name: repr(value) for name, value in defaults.items() if name not in _NOT_SETTINGS and name not in hyperparams
     }
 
 

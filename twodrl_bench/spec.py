@@ -135,7 +135,7 @@ def _arm(source: str, name: Any, arm: Any) -> dict[str, Any]:
     unknown = sorted(set(arm) - {"algo", "override", "settings"})
     if unknown:
         raise _fail(source, f"arms.{name}", "takes only algo, override and settings", unknown)
-    from twodrl_bench.algos import ALGOS
+    from twodrl_bench.algorithms import ALGOS
 
     if arm.get("algo") not in ALGOS:
         raise _fail(source, f"arms.{name}.algo", f"must be one of {sorted(ALGOS)}", arm.get("algo"))

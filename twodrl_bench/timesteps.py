@@ -250,7 +250,8 @@ def run(job: Job) -> list[Row]:
     ``final_return_std``, ``final_length``, ``final_events`` (per episode), ``final_event_share``; over the
     training episodes ``train_episodes``, ``train_return``, ``train_events_per_episode``, ``train_event_share``;
     ``curve`` (:func:`learning_curve` as JSON text, so that the row is flat); for an arm whose entropy coefficient
-    is learned (:mod:`twodrl_bench.auto_entropy`), ``ent_coef_course`` (the final model's, as JSON text); ``wall_s``.
+    is learned (:mod:`twodrl_bench.algorithms.auto_entropy`), ``ent_coef_course`` (the final model's, as JSON
+    text); ``wall_s``.
     """
     import torch as th
     from rl_zoo3 import utils as zoo_utils
@@ -258,7 +259,7 @@ def run(job: Job) -> list[Row]:
     from stable_baselines3.common.vec_env import VecNormalize
 
     from sb3_twodrl.zoo import register_zoo
-    from twodrl_bench.auto_entropy import AUTO_ENTROPY_ALGOS
+    from twodrl_bench.algorithms.auto_entropy import AUTO_ENTROPY_ALGOS
     from twodrl_bench.checkpoint import set_rng_state
 
     clock = time.perf_counter()
