@@ -25,7 +25,7 @@ from twodrl_bench.algorithms.auto_entropy import (
     max_entropy,
 )
 from twodrl_bench.checkpoint import load_checkpoint, save_checkpoint, set_rng_state
-from twodrl_bench.experiment import constructor_defaults
+from twodrl_bench.settings import constructor_defaults
 
 PPO_ARGS = dict(n_steps=32, batch_size=16, n_epochs=2)
 AUTO = [(AutoEntropyA2C, {}), (AutoEntropyPPO, PPO_ARGS), (AutoEntropyTwoDimA2C, {}), (AutoEntropyTwoDimPPO, PPO_ARGS)]

@@ -11,7 +11,7 @@ import twodrl_envs  # noqa: F401  (registers the Nomad office ids)
 import sb3_twodrl
 from sb3_twodrl.hyperparams import PACKAGED, hyperparams_path, load, read_entry
 from twodrl_bench import Experiment, load_spec
-from twodrl_bench.experiment import epoch_entry
+from twodrl_bench.settings import epoch_entry
 
 
 @pytest.mark.parametrize("algo", PACKAGED)

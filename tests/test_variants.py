@@ -20,8 +20,8 @@ from twodrl_bench.algorithms.variants import (
     VariantTwoDimA2C,
     VariantTwoDimPPO,
 )
-from twodrl_bench.experiment import settings_algo
 from twodrl_bench.runner import run_study
+from twodrl_bench.settings import settings_algo
 from twodrl_bench.spec import load_spec
 
 BASE = {"a2c": {"n_envs": 2, "n_steps": 8}, "twoda2c": {"n_envs": 2, "n_steps": 8, "punishment_gamma": 0.1}}

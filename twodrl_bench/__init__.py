@@ -2,6 +2,7 @@
 
 - :mod:`.spec`: load, validate and compare specs (``specs/<study>.yml``, ``specs/<study>/<part>.yml``);
 - :mod:`.experiment`: the study object, a spec resolved once (:class:`Experiment`), and its jobs (:class:`Job`);
+  :mod:`.settings`: an arm's settings file, entry and defaults in force;
 - :mod:`.runner`: every (arm, seed) job of an experiment into a run folder, resumed and guarded; :mod:`.backends`:
   local processes or Ray tasks; :mod:`.machine`: what decides the bits;
 - :mod:`.jobs`: the job interface and its one checkpoint-and-resume scheme; its protocols' jobs: :mod:`.epochs`

@@ -40,16 +40,12 @@ from sb3_twodrl.hyperparams import evaluate
 from twodrl_bench import jobs
 from twodrl_bench.algorithms import algo_class
 from twodrl_bench.checkpoint import set_rng_state
-from twodrl_bench.experiment import Job
+from twodrl_bench.experiment import PAPER_TRIALS, TRANSFER_SEED, Job
 from twodrl_bench.protocol import LEARNING, METRICS, trial_seed
 from twodrl_bench.trials import run_test_trials, tally, trial_outcomes
 from twodrl_bench.vec_env import make_test_env, make_train_env
 
 Row = dict[str, Any]
-PAPER_TRIALS = 10
-"""Trials on the real robot per policy in the paper (section 3.5): the first of a transfer's trials."""
-TRANSFER_SEED = 1_000_003
-"""The held-out seed of a transfer's trials (sub-env ``i`` seeded ``seed + i``); its own env's: ``seed + 10**4``."""
 OWN_TRIALS = 10
 """Trials of a transferred policy in its own training env (did it learn at all?)."""
 

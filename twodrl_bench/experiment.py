@@ -16,25 +16,21 @@ from __future__ import annotations
 
 import copy
 import dataclasses
-import inspect
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar
 
-from sb3_twodrl.hyperparams import hyperparams_path, read_entry
+from twodrl_bench.settings import check_constants, class_defaults, epoch_entry, settings_file, timesteps_entry
 from twodrl_bench.spec import FIELDS, Spec, diff, load_spec, validate
 
 RUN_OPTIONS = ("checkpoint_every", "save_model", "tensorboard")
 """Protocol keys that change what a run keeps, not its rows: free to change between invocations."""
 FREE = ("name", "rules", "report", "seeds")
 """Top-level fields that may change between invocations on one folder (seeds may be added)."""
-ZOO_ONLY = ("n_timesteps", "callback", "normalize", "env_wrapper", "vec_env_wrapper", "frame_stack")
-"""Keys of an rl-zoo3 entry that only rl-zoo3 reads: dropped from an epoch protocol's settings."""
-STOCK = {"twoda2c": "a2c", "twodppo": "ppo"}
-"""The stock algorithm of each 2D-RL algorithm: whose entry it reads from rl-zoo3's files (``settings: rl-zoo3``)."""
-SETTINGS_SUFFIXES = ("_variant", "_auto")
-"""An algorithm named ``<algo><suffix>`` (an ablation variant, a self-tuning arm) reads ``<algo>``'s settings."""
-_NOT_SETTINGS = ("policy", "env", "verbose", "seed", "device", "tensorboard_log", "_init_setup_model")
+PAPER_TRIALS = 10
+"""Trials on the real robot per policy in the paper (section 3.5): the first of a transfer's trials."""
+TRANSFER_SEED = 1_000_003
+"""The held-out seed of a transfer's trials (sub-env ``i`` seeded ``seed + i``); its own env's: ``seed + 10**4``."""
 
 
 def _positive_int(key: str, value: Any, zero: bool = False) -> int:
@@ -94,8 +90,6 @@ class EpochProtocol:
 
 def _transfer(transfer: Any, save_model: bool) -> dict[str, Any]:
     """``{env, trials, seed}`` of a transfer (seed defaults to the held-out one), checked."""
-    from twodrl_bench.epochs import PAPER_TRIALS, TRANSFER_SEED
-
     key = "protocol.transfer"
     ok = isinstance(transfer, dict) and {"env", "trials"} <= set(transfer) <= {"env", "trials", "seed"}
     if not ok or not isinstance(transfer["env"], str):
@@ -172,76 +166,6 @@ def protocol_of(raw: Any) -> Protocol:
     )
 
 
-def settings_algo(algo: str) -> str:
-    """The algorithm whose settings file ``algo`` reads (:data:`SETTINGS_SUFFIXES`)."""
-    for suffix in SETTINGS_SUFFIXES:
-        algo = algo.removesuffix(suffix)
-    return algo
-
-
-def settings_file(algo: str, settings: str = "packaged") -> Path:
-    """The rl-zoo3 hyperparameter file an arm of ``algo`` reads: ``packaged`` (:mod:`sb3_twodrl.hyperparams`),
-    ``rl-zoo3`` (rl-zoo3's own, of the stock algorithm for a 2D-RL one: :data:`STOCK`) or a folder of ``<algo>.yml``.
-
-    :raises ValueError: if the file does not exist
-    """
-    algo = settings_algo(algo)
-    if settings == "rl-zoo3":
-        import rl_zoo3
-
-        algo = STOCK.get(algo, algo)
-        path = Path(rl_zoo3.__file__).parent / "hyperparams" / f"{algo}.yml"
-        if not path.is_file():
-            raise ValueError(f"settings: rl-zoo3 has no hyperparameter file for {algo!r} ({path})")
-        return path
-    return hyperparams_path(algo, None if settings == "packaged" else settings)
-
-
-def epoch_entry(path: str | Path, env_id: str) -> dict[str, Any]:
-    """The ``env_id`` entry of an rl-zoo3 hyperparameter file as written, without :data:`ZOO_ONLY` keys.
-
-    :raises ValueError: if the file does not exist or has no entry for ``env_id``
-    """
-    return {k: v for k, v in read_entry(path, env_id).items() if k not in ZOO_ONLY}
-
-
-def check_constants(hyperparams: dict[str, Any], where: str) -> None:
-    """Refuse a schedule (``lin_...``): an epoch protocol has no total budget to schedule over.
-
-    :raises ValueError: naming ``where``, the key and the value
-    """
-    for key, value in hyperparams.items():
-        if isinstance(value, str) and value.startswith(("lin_", "linear_")):
-            raise ValueError(f"{where}: {key} is a schedule ({value!r}); the epoch protocol takes constants")
-
-
-def constructor_defaults(cls: type) -> dict[str, Any]:
-    """The default of every constructor argument of ``cls``: its ``__init__``'s, then, while an ``__init__`` passes
-    ``**kwargs`` on, those of the next class of the MRO that defines one (a subclass's default wins)."""
-    out: dict[str, Any] = {}
-    for klass in cls.__mro__:
-        if "__init__" not in vars(klass) or klass is object:
-            continue
-        parameters = inspect.signature(vars(klass)["__init__"]).parameters.values()
-        for p in parameters:
-            if p.default is not p.empty:
-                out.setdefault(p.name, p.default)
-        if not any(p.kind is p.VAR_KEYWORD for p in parameters):
-            break
-    return out
-
-
-def class_defaults(algo: str, hyperparams: dict[str, Any]) -> dict[str, str]:
-    """The constructor defaults of ``algo``'s class (:func:`constructor_defaults`) that ``hyperparams`` leave in
-    force, as ``repr``: a run resumed after a default changed (a new release) is then refused, not mixed."""
-    from twodrl_bench.algorithms import algo_class
-
-    defaults = constructor_defaults(algo_class(algo))
-    return {
-        name: repr(value) for name, value in defaults.items() if name not in _NOT_SETTINGS and name not in hyperparams
-    }
-
-
 @dataclass(frozen=True)
 class Arm:
     """One arm, resolved: ``hyperparams`` (its settings' entry with ``override`` over it) and ``defaults`` (the
@@ -260,10 +184,8 @@ class Arm:
 
         :raises ValueError: if a settings file or its entry is missing, or (epochs) holds a schedule
         """
-        if isinstance(protocol, TimestepsProtocol):  # the timesteps job's own entries (rl-zoo3's files among them)
-            from twodrl_bench.timesteps import resolve_arm
-
-            hyperparams = resolve_arm(arm, env, protocol.as_dict())
+        if isinstance(protocol, TimestepsProtocol):
+            hyperparams = timesteps_entry(arm, env, protocol.as_dict())
         else:
             entry = epoch_entry(settings_file(arm["algo"], arm["settings"]), env)
             hyperparams = {**entry, **arm["override"]}

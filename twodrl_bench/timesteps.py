@@ -18,7 +18,7 @@ Keys this job reads, beside the fields every spec has:
   e.g. rl-zoo3's ``CartPole-v1`` entry for ``CliffWalkingSplit-v1``, which has none of its own.
 - ``protocol.task`` (optional): the rows' ``task`` label (default: the spec's ``env``).
 - ``arms.<name>.settings``: ``packaged`` (default), ``rl-zoo3`` or a folder
-  (:func:`twodrl_bench.experiment.settings_file`); ``arms.<name>.override``: settings over the entry.
+  (:func:`twodrl_bench.settings.settings_file`); ``arms.<name>.override``: settings over the entry.
 
 Resolving a spec's timesteps arm is :func:`resolve_arm`; :func:`run_job` runs a job given as plain data.
 
@@ -46,7 +46,8 @@ from stable_baselines3.common.monitor import Monitor, ResultsWriter
 
 from twodrl_bench import jobs
 from twodrl_bench.experiment import Arm, Experiment, Job, TimestepsProtocol
-from twodrl_bench.experiment import settings_file as experiment_settings_file
+from twodrl_bench.settings import check_entry, timesteps_entry
+from twodrl_bench.settings import settings_file as settings_file_of
 
 Row = dict[str, Any]
 EVAL_SEED = 10**6
@@ -64,47 +65,17 @@ def check_protocol(protocol: dict[str, Any]) -> TimestepsProtocol:
 
 
 def settings_file(arm: dict[str, Any]) -> Path:
-    """The rl-zoo3 hyperparameter file ``arm`` reads (:func:`twodrl_bench.experiment.settings_file`).
+    """The rl-zoo3 hyperparameter file ``arm`` reads (:func:`twodrl_bench.settings.settings_file`).
 
     :raises ValueError: if the file does not exist
     """
-    return experiment_settings_file(arm["algo"], arm.get("settings", "packaged"))
+    return settings_file_of(arm["algo"], arm.get("settings", "packaged"))
 
 
 def resolve_arm(arm: dict[str, Any], env: str, protocol: dict[str, Any]) -> dict[str, Any]:
-    """The rl-zoo3 entry ``arm`` trains with: its settings' entry (``protocol.entry``, else ``env``), the arm's
-    ``override`` over it, and the ``Monitor`` key of ``protocol.events``.
-
-    :raises ValueError: if the file or entry is missing, or if a 2D-RL arm that reads ``info`` would see rewards
-        that ``VecNormalize`` rescales (its ``r_R = reward + info["punishment"]`` would mix two scales)
-    """
-    from sb3_twodrl.hyperparams import read_entry
-
-    if not isinstance(arm, dict) or not isinstance(arm.get("algo"), str):
-        raise ValueError(f"arm must be a mapping with an 'algo' name, got {arm!r}")
-    entry = {**read_entry(settings_file(arm), protocol.get("entry") or env), **(arm.get("override") or {})}
-    if protocol.get("events"):
-        entry["monitor_kwargs"] = monitor_kwargs(protocol["events"])
-    check_entry(arm["algo"], entry, protocol)
-    return entry
-
-
-def monitor_kwargs(events: str) -> str:
-    """The entry's ``monitor_kwargs`` that make the training envs' ``Monitor`` record the ``events`` info key."""
-    return f"dict(info_keywords=('{events}',))"
-
-
-def check_entry(name: str, entry: dict[str, Any], protocol: dict[str, Any]) -> None:
-    """:raises ValueError: if the ``Monitor`` does not record ``protocol.events``, or if a 2D-RL arm that reads
-    ``info`` would see rewards that ``VecNormalize`` rescales (its ``r_R = reward + info["punishment"]`` would mix
-    two scales)"""
-    events = protocol.get("events")
-    if events and entry.get("monitor_kwargs") != monitor_kwargs(events):
-        raise ValueError(f"arm {name!r}: monitor_kwargs must record {events!r} (resolve the arm with resolve_arm)")
-    normalize = entry.get("normalize", False)
-    scaled = normalize if isinstance(normalize, bool) else "'norm_reward': False" not in normalize
-    if scaled and entry.get("reward_split") in ("info", "cost"):
-        raise ValueError(f"arm {name!r}: the entry normalises rewards, which reward_split='info' cannot split")
+    """The rl-zoo3 entry ``arm`` (a spec's ``{algo, override, settings}``) trains with on ``env`` under ``protocol``
+    (:func:`twodrl_bench.settings.timesteps_entry`, what the study object resolves a timesteps arm to)."""
+    return timesteps_entry(arm, env, protocol)
 
 
 def training_episodes(run_dir: Path, n_envs: int, events: str | None) -> np.ndarray:
