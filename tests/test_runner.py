@@ -220,3 +220,11 @@ def test_a_report_by_module_path_taking_records_and_specs(tmp_path, settings, ca
     run_study({**spec, "report": "tests.toy_records_report"}, tmp_path, "serial")
     assert "4 rows of ['toy'], arms ['a2c', 'twoda2c']" in capsys.readouterr().out
     assert (tmp_path / "table.md").read_text() == "4 rows of ['toy'], arms ['a2c', 'twoda2c']\n"
+
+
+@pytest.mark.parametrize("study", ["quick_preset", "auto_entropy"])
+def test_a_committed_studys_report_rebuilds_its_table_from_its_results_folder(tmp_path, study, capsys) -> None:
+    """``sb3-twodrl-bench report <study> --runs results``: a folder without rows files reads its ``rows.csv``."""
+    results = Path(__file__).parents[1] / "results"
+    cli.main(["report", study, "--runs", str(results), "--out", str(tmp_path)])
+    assert (tmp_path / "table.md").read_bytes() == (results / study / "table.md").read_bytes()
