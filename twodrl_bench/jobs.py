@@ -53,7 +53,9 @@ def resume(job: Job) -> tuple[BaseAlgorithm, dict[str, Any], dict[str, Any]] | N
     if not path.exists():
         return None
     model, rng, state = load_checkpoint(path)
-    differences = diff(state.pop("identity", None), job.identity())
+    if "identity" not in state:
+        raise ValueError(f"{path} was written by an older bench (it names no run): remove it to start the job over")
+    differences = diff(state.pop("identity"), job.identity())
     if differences:
         raise ValueError(f"{path} was written by another run (stored != new): " + "; ".join(differences))
     return model, rng, state
