@@ -75,3 +75,15 @@ def test_a_checkpoint_of_another_run_is_refused_naming_the_key(tmp_path) -> None
     kill_at_second_checkpoint(job)
     with pytest.raises(ValueError, match=r"another run .*protocol\.eval_episodes: 2 != 3"):
         jobs.run(cliff_job(tmp_path, eval_episodes=3))
+
+
+def test_a_checkpoint_that_names_no_run_is_refused(tmp_path) -> None:
+    """An older bench's checkpoint (no identity in it) is not resumed as if it were this job's."""
+    from stable_baselines3 import A2C
+
+    from twodrl_bench.checkpoint import save_checkpoint
+
+    job = cliff_job(tmp_path)
+    save_checkpoint(jobs.checkpoint_path(job.out_dir, job.name), A2C("MlpPolicy", "CartPole-v1"), {"protocol": {}})
+    with pytest.raises(ValueError, match="written by an older bench"):
+        jobs.resume(job)
