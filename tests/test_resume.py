@@ -16,6 +16,7 @@ pytest.importorskip("rl_zoo3")
 
 from twodrl_bench import jobs
 from twodrl_bench.experiment import Experiment, Job
+from twodrl_bench.runner import run_job
 from twodrl_bench.spec import load_spec
 
 BUDGET, EVERY = 3000, 1000
@@ -46,7 +47,7 @@ def _run_and_die(job: Job, die_at_save: int) -> None:
         original(*args, **kwargs)
 
     jobs.save = dying
-    jobs.run(job)
+    run_job(job)
 
 
 def kill_at_second_checkpoint(job: Job) -> None:
@@ -58,13 +59,13 @@ def kill_at_second_checkpoint(job: Job) -> None:
 
 def test_a_killed_timesteps_job_resumes_with_the_uninterrupted_row(tmp_path) -> None:
     """Killed after its first checkpoint (the Monitor files then hold episodes past it), rerun: the same row."""
-    whole = jobs.run(cliff_job(tmp_path / "whole"))
+    whole = run_job(cliff_job(tmp_path / "whole"))
     killed = cliff_job(tmp_path / "killed")
     kill_at_second_checkpoint(killed)
     assert jobs.checkpoint_path(killed.out_dir, killed.name).exists()
     (done,) = map(int, jobs.progress_path(killed.out_dir, killed.name).read_text().split())
     assert EVERY <= done < 2 * EVERY
-    resumed = jobs.run(killed)
+    resumed = run_job(killed)
     assert without_wall(resumed) == without_wall(whole)
     assert json.loads(resumed[0]["curve"])[-1][0] == BUDGET and resumed[0]["train_episodes"] > 0
     assert not jobs.checkpoint_path(killed.out_dir, killed.name).exists(), "a finished job leaves no checkpoint"
@@ -74,7 +75,7 @@ def test_a_checkpoint_of_another_run_is_refused_naming_the_key(tmp_path) -> None
     job = cliff_job(tmp_path)
     kill_at_second_checkpoint(job)
     with pytest.raises(ValueError, match=r"another run .*protocol\.eval_episodes: 2 != 3"):
-        jobs.run(cliff_job(tmp_path, eval_episodes=3))
+        run_job(cliff_job(tmp_path, eval_episodes=3))
 
 
 def test_a_checkpoint_that_names_no_run_is_refused(tmp_path) -> None:

@@ -5,9 +5,8 @@
   :mod:`.settings`: an arm's settings file, entry and defaults in force;
 - :mod:`.runner`: every (arm, seed) job of an experiment into a run folder, resumed and guarded; :mod:`.backends`:
   local processes or Ray tasks; :mod:`.machine`: what decides the bits;
-- :mod:`.jobs`: the job interface and its one checkpoint-and-resume scheme; its protocols' jobs: :mod:`.epochs`
-  (epochs of exactly K learning trials and M test trials) and :mod:`.timesteps` (rl-zoo3's training, a final
-  evaluation);
+- the jobs, each ``run(job) -> rows``: :mod:`.epochs` (epochs of exactly K learning trials and M test trials) and
+  :mod:`.timesteps` (rl-zoo3's training, a final evaluation), resumable by one scheme (:mod:`.jobs`);
 - :mod:`.reports`: what a study's rows say (tables, figures);
 - :mod:`.cli`: ``sb3-twodrl-bench run | report | status``;
 - :mod:`.algorithms`: the bench's algorithms (stock arms on the fast path, variants, self-tuning entropy) by name;
@@ -24,9 +23,8 @@ use_reproducible_kernels()  # before any module below runs a torch kernel
 
 from twodrl_bench.algorithms import ALGOS, algo_class  # noqa: E402
 from twodrl_bench.experiment import Experiment, Job  # noqa: E402
-from twodrl_bench.jobs import run as run_job  # noqa: E402
 from twodrl_bench.protocol import COLUMNS, METRICS  # noqa: E402
-from twodrl_bench.runner import run_study  # noqa: E402
+from twodrl_bench.runner import run_job, run_study  # noqa: E402
 from twodrl_bench.spec import load_spec  # noqa: E402
 from twodrl_bench.trials import run_test_trials  # noqa: E402
 from twodrl_bench.vec_env import VectorEnvAdapter, make_test_env, make_train_env  # noqa: E402

@@ -14,8 +14,8 @@ At the end the model is saved (``models/<arm>_seed<seed>.zip``, loadable by ``<A
 ``transfer`` protocol key (paper section 3.5) the saved policy then runs deterministic trials on another
 env (:func:`transfer_columns`), reported in the last epoch's row.
 
-:func:`run` is the job interface's entry (:mod:`twodrl_bench.jobs`): a job in, rows out; checkpoints and resume
-are the interface's (:func:`twodrl_bench.jobs.resume`).
+:func:`run` is the epoch protocol's job (:func:`twodrl_bench.runner.run_job`): a job in, rows out; checkpoints and
+resume are every job's (:func:`twodrl_bench.jobs.resume`).
 """
 
 from __future__ import annotations

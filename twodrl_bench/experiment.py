@@ -5,7 +5,7 @@ settings (the env's entry of ``<algo>.yml``: packaged, rl-zoo3's own or in a fol
 overrides, once; the result is frozen and holds everything a run needs. The defaults of a protocol are
 stated once, in its dataclass (:class:`EpochProtocol`, :class:`TimestepsProtocol`). The flow goes one way:
 the runner (:mod:`twodrl_bench.runner`) builds an :class:`Experiment`, the experiment makes its
-:class:`Job` objects, a job runs (:mod:`twodrl_bench.jobs`).
+:class:`Job` objects, the runner runs each by its protocol's module, which resumes it by :mod:`twodrl_bench.jobs`.
 
 "Same run?" is decided in one place, :func:`deciding`: a run folder's stored experiment and a new one must
 agree on it for their common arms (:meth:`Experiment.differences`), and a job's checkpoint must agree on
@@ -295,7 +295,7 @@ def deciding(spec: Spec, arms: set[str]) -> Spec:
 
 @dataclass(frozen=True)
 class Job:
-    """One (arm, seed) of an experiment, writing under ``out_dir``; run by :func:`twodrl_bench.jobs.run`."""
+    """One (arm, seed) of an experiment, writing under ``out_dir``; run by :func:`twodrl_bench.runner.run_job`."""
 
     experiment: Experiment
     arm_name: str

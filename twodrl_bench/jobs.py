@@ -1,7 +1,6 @@
-"""The job interface: a :class:`~twodrl_bench.experiment.Job` in, its rows out, resumable from its checkpoint.
+"""The one checkpoint-and-resume scheme of every job (:mod:`twodrl_bench.epochs`, :mod:`twodrl_bench.timesteps`).
 
-:func:`run` runs a job by its protocol's module (:mod:`twodrl_bench.epochs`, :mod:`twodrl_bench.timesteps`), each
-``run(job) -> rows``. Both keep their learning run resumable the same way: at a clean boundary (a rollout's
+Both protocols' jobs keep their learning run resumable the same way: at a clean boundary (a rollout's
 start) they save a checkpoint (:func:`save`: the whole algorithm, its envs, every generator and the job's own
 state, :mod:`twodrl_bench.checkpoint`); a job that finds one continues from it (:func:`resume`) if the checkpoint
 was written by the same run (:meth:`~twodrl_bench.experiment.Job.identity`) and gives the rows an uninterrupted
@@ -13,7 +12,6 @@ by ``sb3-twodrl-bench status``) and ``models/<job>.zip``.
 
 from __future__ import annotations
 
-import importlib
 from pathlib import Path
 from typing import Any
 
@@ -22,8 +20,6 @@ from stable_baselines3.common.base_class import BaseAlgorithm
 from twodrl_bench.checkpoint import load_checkpoint, save_checkpoint
 from twodrl_bench.experiment import Job
 from twodrl_bench.spec import diff
-
-Row = dict[str, Any]
 
 
 def checkpoint_path(out_dir: str | Path, name: str) -> Path:
@@ -37,11 +33,6 @@ def model_path(out_dir: str | Path, name: str) -> Path:
 def progress_path(out_dir: str | Path, name: str) -> Path:
     """One line per unit of progress (an epoch, a checkpoint's timesteps) of a running job."""
     return Path(out_dir) / "progress" / f"{name}.txt"
-
-
-def run(job: Job) -> list[Row]:
-    """The rows of ``job``, by its protocol's module (resuming its checkpoint)."""
-    return importlib.import_module(job.protocol.module).run(job)
 
 
 def resume(job: Job) -> tuple[BaseAlgorithm, dict[str, Any], dict[str, Any]] | None:

@@ -1,8 +1,9 @@
 """The study runner: every (arm, seed) job of an experiment, run on a backend, resumed, guarded.
 
 The runner builds the study object (:class:`twodrl_bench.experiment.Experiment`) from a spec, guards the run
-folder with it, asks it for its jobs and runs those without rows (:func:`twodrl_bench.jobs.run`, on a backend of
-:mod:`twodrl_bench.backends`).
+folder with it, asks it for its jobs and runs those without rows on a backend (:mod:`twodrl_bench.backends`),
+each by :func:`run_job`: the job interface, ``run(job) -> rows`` of the protocol's module (:mod:`twodrl_bench.epochs`,
+:mod:`twodrl_bench.timesteps`), both resumable the same way (:mod:`twodrl_bench.jobs`).
 
 The run folder (:mod:`twodrl_bench.folders`: ``spec.yml``, ``machine.json``, ``rows/``, ``rows.csv``) also
 holds what the jobs keep: ``checkpoints/`` (a job without rows resumes from its checkpoint), ``progress/``,
@@ -17,7 +18,6 @@ import os
 from pathlib import Path
 from typing import Any
 
-from twodrl_bench import jobs
 from twodrl_bench.backends import run_jobs
 from twodrl_bench.checkpoint import atomic_write_bytes
 from twodrl_bench.experiment import Experiment, Job
@@ -25,6 +25,11 @@ from twodrl_bench.folders import collect, read_spec, record_machine, rows_path, 
 from twodrl_bench.spec import Spec, dump
 
 Row = dict[str, Any]
+
+
+def run_job(job: Job) -> list[Row]:
+    """The rows of ``job``, by its protocol's module (resuming its checkpoint)."""
+    return importlib.import_module(job.protocol.module).run(job)
 
 
 def guard(folder: str | Path, experiment: Experiment) -> Experiment:
@@ -86,7 +91,7 @@ def run_study(
         done[0] += 1
         print(f"[{done[0]}/{total}] {job.arm_name} seed {job.seed}: {len(rows)} rows", flush=True)
 
-    run_jobs(jobs.run, pending, on_done, backend, workers or os.cpu_count() or 1, address)
+    run_jobs(run_job, pending, on_done, backend, workers or os.cpu_count() or 1, address)
     collect(folder)
     if report:
         from twodrl_bench.reports import report_run
