@@ -1,8 +1,8 @@
 #!/usr/bin/env python
-"""Throughput of the paper's protocol, both arms measured side by side in one run (targets: docs/speed.md).
+"""Throughput of the paper's protocol, both arms measured side by side in one run (targets: docs/benchmarks.md).
 
 For each n_envs: one (algo, seed) run per arm (``a2c`` is SB3's A2C on the experiments' fast path,
-:mod:`twodrl_bench.baselines`) of ``--epochs`` paper-sized epochs (K learning
+:mod:`twodrl_bench.algorithms.baselines`) of ``--epochs`` paper-sized epochs (K learning
 trials, then M test trials, batched pipeline, exactly as :mod:`twodrl_bench.epochs` runs them; no
 TensorBoard, checkpoints or models), timed by the process's CPU time (the machine is shared).
 Prints learning env-steps per CPU second (target >= 100,000), TwoDimA2C / A2C (target >= 0.9),
@@ -29,18 +29,22 @@ import gymnasium as gym  # noqa: E402
 import torch as th  # noqa: E402
 
 import twodrl_envs  # noqa: E402, F401  (registers the IDs)
-from sb3_twodrl.hyperparams import hyperparams_path  # noqa: E402
-from twodrl_bench import PRESETS, RunSpec, load_hyperparams, run_pair  # noqa: E402
+from twodrl_bench import Experiment, load_spec  # noqa: E402
+from twodrl_bench.epochs import train  # noqa: E402
+
+PAPER = "paper_preset/NomadOffice-v0"
+"""The spec whose protocol the projection is for (1000 epochs of K = 1000, M = 100, 5 seeds)."""
 
 
 def measure(env_id: str, algo: str, n_envs: int, vec_env: str, args: argparse.Namespace) -> dict[str, float]:
-    hp = load_hyperparams(hyperparams_path(algo), env_id)
-    hp["n_envs"] = n_envs
+    protocol = {"epochs": args.epochs, "learn_episodes": args.learn_episodes, "test_episodes": args.test_episodes}
+    protocol.update(vec_env=vec_env, checkpoint_every=0, save_model=False, tensorboard=False)
+    spec = {"name": "bench_reproduce", "env": env_id, "protocol": protocol, "seeds": [args.seed], "report": "paper"}
+    experiment = Experiment.from_spec({**spec, "arms": {algo: {"algo": algo, "override": {"n_envs": n_envs}}}})
     with tempfile.TemporaryDirectory() as out:
-        spec = RunSpec(env_id, algo, args.seed, args.epochs, args.learn_episodes, args.test_episodes, hp, out)
-        spec.vec_env, spec.checkpoint_every, spec.save_model, spec.tensorboard = vec_env, 0, False, False
+        (job,) = experiment.jobs(out)
         cpu, wall = time.process_time(), time.perf_counter()
-        rows = run_pair(spec)
+        rows = train(job)
         cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
     steps = rows[-1]["env_steps"]
     return {
@@ -53,20 +57,21 @@ def measure(env_id: str, algo: str, n_envs: int, vec_env: str, args: argparse.Na
 
 
 def main() -> None:
-    paper = PRESETS["paper"]
+    paper = load_spec(PAPER)
+    paper_protocol = paper["protocol"]
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--env", default="NomadOffice-v0")
     p.add_argument("--n-envs", type=int, nargs="+", help="batched n_envs to measure (default: the YAML's)")
     p.add_argument("--dummy-n-envs", type=int, default=16, help="n_envs of the per-env comparison (0: skip)")
     p.add_argument("--epochs", type=int, default=3, help="epochs per measured run")
-    p.add_argument("--learn-episodes", "-K", type=int, default=paper["learn_episodes"])
-    p.add_argument("--test-episodes", "-M", type=int, default=paper["test_episodes"])
+    p.add_argument("--learn-episodes", "-K", type=int, default=paper_protocol["learn_episodes"])
+    p.add_argument("--test-episodes", "-M", type=int, default=paper_protocol["test_episodes"])
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--cores", type=int, default=2, help="cores of the projection")
     p.add_argument("--repeats", type=int, default=1, help="runs per arm, alternating their order; the median rate")
     args = p.parse_args()
     arms = ("a2c", "twoda2c")
-    default_n = int(load_hyperparams(hyperparams_path("a2c"), args.env).get("n_envs", 1))
+    default_n = int(Experiment.from_spec({**paper, "env": args.env}).arms["a2c"].hyperparams.get("n_envs", 1))
     configs = [("batched", n) for n in (args.n_envs or [default_n])]
     if args.dummy_n_envs:
         configs.append(("dummy", args.dummy_n_envs))
@@ -84,7 +89,7 @@ def main() -> None:
     # the runs of an arm are the same run (one seed), so only their rates differ
     results = {key: {**rs[0], "rate": statistics.median(r["rate"] for r in rs)} for key, rs in runs.items()}
     limit = gym.spec(args.env).max_episode_steps
-    n_runs, epochs, k = 2 * paper["seeds"], paper["epochs"], paper["learn_episodes"]
+    n_runs, epochs, k = 2 * len(paper["seeds"]), paper_protocol["epochs"], paper_protocol["learn_episodes"]
     print(f"\n{args.env}, {args.epochs} epochs of K={args.learn_episodes}, M={args.test_episodes}, seed {args.seed}")
     print(
         "| pipeline | n_envs | A2C env-steps/s | TwoDimA2C env-steps/s | TwoDimA2C / A2C | paper preset on "

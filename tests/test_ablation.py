@@ -8,11 +8,12 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
+from twodrl_bench.experiment import Experiment
 from twodrl_bench.reports import ablation, find_parts
 from twodrl_bench.runner import run_study
-from twodrl_bench.spec import load_spec, resolve
+from twodrl_bench.spec import load_spec
 
-SPEC = resolve(load_spec("ablation"))
+SPEC = Experiment.from_spec("ablation").as_dict()
 FIXED = ("a2c_fixed", "twod_fixed", "twod_fixed_compensated", "twoda2c_fixed")
 TWO_D = ("punishment_gamma", "reward_split")
 

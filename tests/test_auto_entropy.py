@@ -1,4 +1,5 @@
-"""The self-tuning entropy arms (twodrl_bench.auto_entropy): SAC's learned coefficient on the on-policy algorithms."""
+"""The self-tuning entropy arms (twodrl_bench.algorithms.auto_entropy): SAC's learned coefficient on the on-policy
+algorithms."""
 
 import inspect
 import math
@@ -14,7 +15,7 @@ from stable_baselines3.common.envs import IdentityEnv, IdentityEnvMultiDiscrete
 
 import twodrl_bench
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
-from twodrl_bench.auto_entropy import (
+from twodrl_bench.algorithms.auto_entropy import (
     AUTO_ENTROPY_ALGOS,
     TARGET_FRACTION,
     AutoEntropyA2C,
@@ -24,6 +25,7 @@ from twodrl_bench.auto_entropy import (
     max_entropy,
 )
 from twodrl_bench.checkpoint import load_checkpoint, save_checkpoint, set_rng_state
+from twodrl_bench.settings import constructor_defaults
 
 PPO_ARGS = dict(n_steps=32, batch_size=16, n_epochs=2)
 AUTO = [(AutoEntropyA2C, {}), (AutoEntropyPPO, PPO_ARGS), (AutoEntropyTwoDimA2C, {}), (AutoEntropyTwoDimPPO, PPO_ARGS)]
@@ -151,16 +153,13 @@ def test_the_target_is_a_fraction_of_the_maximum_entropy() -> None:
     assert model.target_entropy == pytest.approx(TARGET_FRACTION * 2 * math.log(2))
 
 
-def test_the_signature_holds_the_base_defaults_and_the_new_arguments() -> None:
-    """The bench records a class's constructor defaults from its signature."""
-    parameters = inspect.signature(AutoEntropyTwoDimA2C.__init__).parameters
-    assert parameters["ent_coef"].default == "auto"
-    assert parameters["target_entropy_fraction"].default == TARGET_FRACTION
-    assert parameters["ent_coef_lr"].default is None
-    assert (
-        parameters["punishment_gamma"].default
-        == inspect.signature(TwoDimA2C.__init__).parameters["punishment_gamma"].default
-    )
+def test_the_recorded_defaults_hold_the_base_defaults_and_the_new_arguments() -> None:
+    """The bench records a class's constructor defaults along the ``__init__`` chain (a subclass's default wins)."""
+    defaults = constructor_defaults(AutoEntropyTwoDimA2C)
+    assert defaults["ent_coef"] == "auto"
+    assert defaults["target_entropy_fraction"] == TARGET_FRACTION
+    assert defaults["ent_coef_lr"] is None
+    assert defaults["punishment_gamma"] == inspect.signature(TwoDimA2C.__init__).parameters["punishment_gamma"].default
     assert set(AUTO_ENTROPY_ALGOS) == {"a2c_auto", "ppo_auto", "twoda2c_auto", "twodppo_auto"}
 
 
@@ -250,13 +249,21 @@ def test_the_coefficients_course_is_kept_per_tenth_of_the_budget_and_saved(algo,
 def test_an_epoch_runs_rows_carry_the_coefficient_of_a_learned_one_only(tmp_path) -> None:
     """The paper's epochs (no set budget): each row holds the last update's alpha and entropy fraction."""
     import twodrl_envs  # noqa: F401  (registers the IDs)
-    from twodrl_bench import RunSpec, run_pair
+    from twodrl_bench import Experiment, run_job
 
     hp = {"n_envs": 4, "gamma": 0.9, "n_steps": 5}
-    common = dict(epochs=2, learn_episodes=4, test_episodes=2, out_dir=str(tmp_path), gym_packages=["twodrl_envs"])
     auto = {**hp, "ent_coef": "auto", "target_entropy_fraction": 0.5, "ent_coef_lr": 0.01}
-    rows = run_pair(RunSpec("NomadOffice-v0", "a2c_auto", 3, hyperparams=auto, tensorboard=False, **common))
+    spec = {
+        "name": "auto",
+        "env": "NomadOffice-v0",
+        "protocol": {"epochs": 2, "learn_episodes": 4, "test_episodes": 2, "tensorboard": False},
+        "seeds": [3],
+        "arms": {"auto": {"algo": "a2c_auto", "override": auto}, "stock": {"algo": "a2c", "override": hp}},
+        "report": "paper",
+    }
+    auto_job, stock_job = Experiment.from_spec(spec).jobs(tmp_path)
+    rows = run_job(auto_job)
     assert [row["ent_coef"] < 1.0 for row in rows] == [True, True]  # a fresh actor is above half the maximum
     assert rows[1]["ent_coef"] < rows[0]["ent_coef"] and all(0.5 < row["entropy_fraction"] <= 1 for row in rows)
-    stock = run_pair(RunSpec("NomadOffice-v0", "a2c", 3, hyperparams=hp, tensorboard=False, **common))
+    stock = run_job(stock_job)
     assert "ent_coef" not in stock[0] and "entropy_fraction" not in stock[0]

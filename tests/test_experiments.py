@@ -1,4 +1,4 @@
-"""twodrl_bench: batched == per-env rows, kill-and-resume == uninterrupted rows, the adapter, bad input."""
+"""twodrl_bench: batched == per-env rows, kill-and-resume == uninterrupted rows (epoch jobs), the adapter, bad input."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import inspect
 import multiprocessing as mp
 import os
 import signal
-from dataclasses import replace
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -15,9 +15,10 @@ from gymnasium.vector import AutoresetMode, SyncVectorEnv
 
 import twodrl_envs  # noqa: F401  (registers the IDs)
 from sb3_twodrl import TwoDimA2C
-from twodrl_bench import RunSpec, VectorEnvAdapter, algo_class, make_train_env, run_pair
+from twodrl_bench import Experiment, Job, VectorEnvAdapter, algo_class, make_train_env
 from twodrl_bench import epochs as runner_module
-from twodrl_bench.epochs import checkpoint_path, progress_path
+from twodrl_bench.epochs import train
+from twodrl_bench.jobs import checkpoint_path, progress_path
 
 ENV = "NomadOffice-v0"
 HP = {
@@ -26,9 +27,20 @@ HP = {
 }
 
 
-def spec(tmp_path, algo: str, **kwargs) -> RunSpec:
-    base = RunSpec(ENV, algo, 3, epochs=4, learn_episodes=8, test_episodes=4, hyperparams=HP[algo], out_dir="")
-    return replace(base, out_dir=str(tmp_path), gym_packages=["twodrl_envs"], tensorboard=False, **kwargs)
+def spec(tmp_path, algo: str, hyperparams: dict[str, Any] | None = None, **protocol: Any) -> Job:
+    """The job of ``algo``, seed 3, on its packaged settings with ``hyperparams`` (default :data:`HP`) over them."""
+    experiment = Experiment.from_spec(
+        {
+            "name": "t",
+            "env": ENV,
+            "protocol": {"epochs": 4, "learn_episodes": 8, "test_episodes": 4, "tensorboard": False, **protocol},
+            "seeds": [3],
+            "arms": {algo: {"algo": algo, "override": HP[algo] if hyperparams is None else hyperparams}},
+            "report": "paper",
+        }
+    )
+    (job,) = experiment.jobs(tmp_path)
+    return job
 
 
 def without_wall(rows: list[dict]) -> list[dict]:
@@ -38,13 +50,13 @@ def without_wall(rows: list[dict]) -> list[dict]:
 
 @pytest.mark.parametrize("algo", ["twoda2c", "a2c"])
 def test_batched_pipeline_gives_the_per_env_rows(tmp_path, algo):
-    batched = run_pair(spec(tmp_path / "batched", algo, vec_env="batched"))
-    per_env = run_pair(spec(tmp_path / "dummy", algo, vec_env="dummy"))
+    batched = train(spec(tmp_path / "batched", algo, vec_env="batched"))
+    per_env = train(spec(tmp_path / "dummy", algo, vec_env="dummy"))
     assert len(batched) == 4 and [r["learn_episodes"] for r in batched] == [8, 16, 24, 32]
     assert without_wall(batched) == without_wall(per_env)
 
 
-def _run_and_die(s: RunSpec, die_at_epoch: int) -> None:
+def _run_and_die(s: Job, die_at_epoch: int) -> None:
     """Worker that is killed (SIGKILL, no clean-up) when it starts the test trials of ``die_at_epoch``."""
     original, calls = runner_module.run_test_trials, []
 
@@ -55,12 +67,12 @@ def _run_and_die(s: RunSpec, die_at_epoch: int) -> None:
         return original(*args, **kwargs)
 
     runner_module.run_test_trials = dying
-    run_pair(s)
+    train(s)
 
 
 @pytest.mark.parametrize("algo", ["twoda2c", "a2c"])
 def test_a_killed_run_resumes_with_the_uninterrupted_rows(tmp_path, algo):
-    uninterrupted = run_pair(spec(tmp_path / "whole", algo, checkpoint_every=2))
+    uninterrupted = train(spec(tmp_path / "whole", algo, checkpoint_every=2))
     killed = spec(tmp_path / "killed", algo, checkpoint_every=2)
     worker = mp.get_context("spawn").Process(target=_run_and_die, args=(killed, 4))
     worker.start()
@@ -68,7 +80,7 @@ def test_a_killed_run_resumes_with_the_uninterrupted_rows(tmp_path, algo):
     assert worker.exitcode == -signal.SIGKILL
     assert checkpoint_path(killed.out_dir, killed.name).exists()
     assert progress_path(killed.out_dir, killed.name).read_text().split() == ["1", "2", "3"]
-    resumed = run_pair(killed)
+    resumed = train(killed)
     assert without_wall(resumed) == without_wall(uninterrupted)
     model = algo_class(algo).load(tmp_path / "killed" / "models" / f"{algo}_seed3.zip")
     assert model.num_timesteps >= resumed[-1]["env_steps"]
@@ -78,10 +90,10 @@ def test_a_killed_run_resumes_with_the_uninterrupted_rows(tmp_path, algo):
 def test_a_shorter_runs_checkpoint_extends_to_the_longer_runs_rows(tmp_path, algo):
     """A run extended from a shorter run's checkpoint (results/factorial/preregistration.md, amendment 7) gives the
     longer run's rows."""
-    longer = run_pair(spec(tmp_path / "whole", algo, checkpoint_every=1))
+    longer = train(spec(tmp_path / "whole", algo, checkpoint_every=1))
     s = spec(tmp_path / "extended", algo, checkpoint_every=1)
-    assert len(run_pair(replace(s, epochs=2))) == 2  # leaves its checkpoint of epoch 1
-    assert without_wall(run_pair(s)) == without_wall(longer)
+    assert len(train(spec(tmp_path / "extended", algo, checkpoint_every=1, epochs=2))) == 2  # its checkpoint of epoch 1
+    assert without_wall(train(s)) == without_wall(longer)
 
 
 @pytest.mark.parametrize("algo", ["twoda2c", "a2c"])
@@ -89,32 +101,30 @@ def test_a_run_with_policy_kwargs_resumes(tmp_path, algo):
     """SB3's A2C writes its optimizer into ``policy_kwargs``; the spec must keep its own, or the
     checkpoint's protocol would differ from the one that resumes it."""
     hp = {**HP[algo], "policy_kwargs": {"net_arch": [8]}}
-    s = spec(tmp_path, algo, checkpoint_every=1, hyperparams=hp)
-    assert len(run_pair(replace(s, epochs=2))) == 2
-    assert s.hyperparams["policy_kwargs"] == {"net_arch": [8]}
-    assert len(run_pair(s)) == 4
+    s = spec(tmp_path, algo, hp, checkpoint_every=1)
+    assert len(train(spec(tmp_path, algo, hp, checkpoint_every=1, epochs=2))) == 2
+    assert s.arm.hyperparams["policy_kwargs"] == {"net_arch": [8]}
+    assert len(train(s)) == 4
 
 
 def test_checkpoint_of_another_protocol_is_refused(tmp_path):
     s = spec(tmp_path, "a2c", checkpoint_every=1)
-    run_pair(s)
-    with pytest.raises(ValueError, match="another protocol"):
-        run_pair(replace(s, learn_episodes=9))
+    train(s)
+    with pytest.raises(ValueError, match=r"another run .*protocol\.learn_episodes: 8 != 9"):
+        train(spec(tmp_path, "a2c", checkpoint_every=1, learn_episodes=9))
 
 
 def test_checkpoint_made_under_other_class_defaults_is_refused(tmp_path, monkeypatch):
     """A run resumed after a release changed a default it relied on would mix two algorithms' rows."""
-    s = spec(tmp_path, "twoda2c", checkpoint_every=1)
-    run_pair(replace(s, epochs=2))  # checkpoints epoch 1
-    assert s.protocol()["defaults"]["interest_coef"] == repr(
-        inspect.signature(TwoDimA2C).parameters["interest_coef"].default
-    )
-    assert "gamma" not in s.protocol()["defaults"]  # set by the hyperparameters
+    s = spec(tmp_path, "twoda2c", checkpoint_every=1, epochs=2)
+    train(s)  # checkpoints epoch 1
+    assert s.arm.defaults["interest_coef"] == repr(inspect.signature(TwoDimA2C).parameters["interest_coef"].default)
+    assert "gamma" not in s.arm.defaults  # set by the hyperparameters
     signature = inspect.signature(TwoDimA2C.__init__)
     changed = [p.replace(default=0.25) if p.name == "min_temperature" else p for p in signature.parameters.values()]
     monkeypatch.setattr(TwoDimA2C.__init__, "__signature__", signature.replace(parameters=changed), raising=False)
-    with pytest.raises(ValueError, match="another protocol"):
-        run_pair(s)
+    with pytest.raises(ValueError, match=r"another run .*defaults\.min_temperature"):
+        train(spec(tmp_path, "twoda2c", checkpoint_every=1))
 
 
 def test_adapter_splits_masked_infos_and_marks_episode_ends():
@@ -145,10 +155,10 @@ def test_bad_input_names_the_argument():
         make_train_env(ENV, 2, 0, mode="fast")
     with pytest.raises(ValueError, match="algo must be one of"):
         algo_class("dqn")
-    with pytest.raises(ValueError, match="learn_episodes must be a positive int"):
-        RunSpec(ENV, "a2c", 0, epochs=1, learn_episodes=0, test_episodes=1, hyperparams={}, out_dir="x")
-    with pytest.raises(ValueError, match="checkpoint_every"):
-        RunSpec(ENV, "a2c", 0, 1, 1, 1, {}, "x", checkpoint_every=-1)
+    with pytest.raises(ValueError, match=r"protocol\.learn_episodes must be a positive int, got 0"):
+        spec("x", "a2c", learn_episodes=0)
+    with pytest.raises(ValueError, match=r"protocol\.checkpoint_every must be an int >= 0, got -1"):
+        spec("x", "a2c", checkpoint_every=-1)
 
 
 def test_cartpole_falls_back_to_per_env():

@@ -10,7 +10,8 @@ import pytest
 import sb3_twodrl
 import twodrl_envs  # noqa: F401  (registers the Nomad office ids)
 from sb3_twodrl.hyperparams import PACKAGED, hyperparams_path, load, read_entry
-from twodrl_bench import load_hyperparams, load_spec, resolve
+from twodrl_bench import Experiment, load_spec
+from twodrl_bench.settings import epoch_entry
 
 
 @pytest.mark.parametrize("algo", PACKAGED)
@@ -28,16 +29,16 @@ def test_every_nomad_id_has_its_own_entry_in_the_protocol_files(algo: str) -> No
 
 def test_an_unknown_env_or_algo_is_an_error_naming_it() -> None:
     with pytest.raises(ValueError, match=r"a2c\.yml has no entry for 'CartPole-v0'"):
-        load_hyperparams(hyperparams_path("a2c"), "CartPole-v0")
+        epoch_entry(hyperparams_path("a2c"), "CartPole-v0")
     with pytest.raises(ValueError, match=r"ToyNav-v0"):
-        resolve({**load_spec("quick_preset"), "env": "ToyNav-v0"})
+        Experiment.from_spec({**load_spec("quick_preset"), "env": "ToyNav-v0"})
     with pytest.raises(ValueError, match=r"dqn\.yml' does not exist"):
         hyperparams_path("dqn")
 
 
 def test_another_folder_is_read_when_given(tmp_path: Path) -> None:
     (tmp_path / "a2c.yml").write_text("ToyNav-v0:\n  n_envs: 3\n  n_timesteps: 100\n")
-    assert load_hyperparams(hyperparams_path("a2c", tmp_path), "ToyNav-v0") == {"n_envs": 3}
+    assert epoch_entry(hyperparams_path("a2c", tmp_path), "ToyNav-v0") == {"n_envs": 3}
 
 
 def _entries() -> list[tuple[str, str]]:

@@ -13,9 +13,10 @@ import yaml
 from tests.toy_study import toy_settings, toy_spec, write_spec
 from twodrl_bench import cli
 from twodrl_bench.backends import run_jobs
+from twodrl_bench.experiment import Experiment
 from twodrl_bench.folders import rows_path
 from twodrl_bench.runner import guard, run_study
-from twodrl_bench.spec import diff, dump, load_spec, packaged_specs, resolve, validate
+from twodrl_bench.spec import diff, dump, load_spec, packaged_specs, validate
 
 pytest.importorskip("pandas")
 
@@ -71,7 +72,7 @@ def test_the_packaged_presets_are_the_papers_protocol() -> None:
     assert {"quick_preset", "paper_preset/NomadOffice-v0", "paper_preset/NomadOfficeMemorable-v0"} <= set(
         packaged_specs()
     )
-    quick = resolve(load_spec("quick_preset"))
+    quick = Experiment.from_spec("quick_preset").as_dict()
     assert quick["env"] == "NomadOfficeMemorable-v0"
     assert {k: quick["protocol"][k] for k in ("epochs", "learn_episodes", "test_episodes")} == {
         "epochs": 30,
@@ -89,7 +90,7 @@ def test_the_packaged_presets_are_the_papers_protocol() -> None:
 
 def test_every_packaged_spec_resolves_and_its_yaml_reads_back_equal() -> None:
     for name in packaged_specs():
-        resolved = resolve(load_spec(name))
+        resolved = Experiment.from_spec(name).as_dict()
         assert resolved["name"] == name
         assert diff(yaml.safe_load(dump(resolved)), resolved) == []
 
@@ -171,7 +172,7 @@ def test_an_added_arm_and_seed_run_into_the_folder_and_are_kept(tmp_path, settin
 
 def _guard_repeatedly(folder: str, arm: str, settings: str) -> None:
     spec = toy_spec(Path(settings))
-    resolved = resolve(validate({**spec, "arms": {arm: spec["arms"][arm]}}))
+    resolved = Experiment.from_spec({**spec, "arms": {arm: spec["arms"][arm]}})
     for _ in range(100):
         guard(folder, resolved)
 
@@ -232,3 +233,11 @@ def test_a_spec_without_a_report_writes_rows_only_and_report_names_the_missing_f
     cli.main(["run", str(path), "--out", str(folder), "--backend", "serial", "--no-report"])  # resumes: all done
     with pytest.raises(ValueError, match="names no report: add `report: <module>`"):
         cli.main(["report", "toy", "--runs", str(tmp_path / "runs"), "--out", str(tmp_path / "results")])
+
+
+@pytest.mark.parametrize("study", ["quick_preset", "auto_entropy"])
+def test_a_committed_studys_report_rebuilds_its_table_from_its_results_folder(tmp_path, study, capsys) -> None:
+    """``sb3-twodrl-bench report <study> --runs results``: a folder without rows files reads its ``rows.csv``."""
+    results = Path(__file__).parents[1] / "results"
+    cli.main(["report", study, "--runs", str(results), "--out", str(tmp_path)])
+    assert (tmp_path / "table.md").read_bytes() == (results / study / "table.md").read_bytes()

@@ -1,9 +1,9 @@
 """The study runner gives the rows of the grid runner of commit 01db862, timings aside.
 
-That grid's rows are made here, on the same machine, by what it ran for each (algo, seed):
-:func:`twodrl_bench.epochs.run_pair` (the same function) on a :class:`~twodrl_bench.protocol.RunSpec`
-built as 01db862's ``specs_from_args`` built it (the env's entry of ``<algo>.yml`` by ``load_hyperparams``,
-``--n-envs`` over it). A committed CSV would not do: rows differ bitwise between machines. The same
+That grid's rows are made here, on the same machine, by what it ran for each (algo, seed): the epoch job's
+training (:func:`twodrl_bench.epochs.train`, the function that grid's ``run_pair`` became) on the settings
+01db862's ``specs_from_args`` built (the env's entry of ``<algo>.yml`` read as written, ``--n-envs`` over
+it). A committed CSV would not do: rows differ bitwise between machines. The same
 comparison against that commit's command itself (``scripts/reproduce.py`` there) on
 ``NomadOfficeMemorable-v0`` is in ``docs/studies.md``.
 """
@@ -13,8 +13,8 @@ from __future__ import annotations
 import pandas as pd
 
 from tests.toy_study import ALGOS, ENV, toy_settings, toy_spec
-from twodrl_bench.epochs import run_pair
-from twodrl_bench.protocol import RunSpec, load_hyperparams
+from twodrl_bench.epochs import train
+from twodrl_bench.experiment import Experiment
 from twodrl_bench.runner import run_study
 
 SEED = 1
@@ -23,9 +23,11 @@ SEED = 1
 def old_rows(settings, out) -> pd.DataFrame:
     rows = []
     for algo in ALGOS:
-        hyperparams = {**load_hyperparams(settings / f"{algo}.yml", ENV), "n_envs": 2}
-        spec = RunSpec(ENV, algo, SEED, 3, 8, 4, hyperparams, str(out), gym_packages=["tests.toy_nav"])
-        rows += run_pair(spec)
+        arm = {"algo": algo, "settings": str(settings), "override": {"n_envs": 2}}
+        protocol = {"epochs": 3, "learn_episodes": 8, "test_episodes": 4}
+        spec = {"name": algo, "env": ENV, "gym_packages": ["tests.toy_nav"], "protocol": protocol, "seeds": [SEED]}
+        (job,) = Experiment.from_spec({**spec, "arms": {algo: arm}, "report": "paper"}).jobs(out)
+        rows += train(job)
     return pd.DataFrame(rows)
 
 

@@ -22,7 +22,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 
 import twodrl_envs  # noqa: F401  (registers the IDs)
 from tests.tabular_oracle import TabularActorCritic
-from twodrl_bench.variants import VariantTwoDimA2C
+from twodrl_bench.algorithms.variants import VariantTwoDimA2C
 from twodrl_envs.nomad.core import GOAL_REWARD
 
 N_STEPS = 1000

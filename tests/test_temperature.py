@@ -11,7 +11,7 @@ from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_twodrl import TwoDimA2C
 from tests.toy_envs import LatticeCorridor
-from twodrl_bench.variants import VariantTwoDimA2C
+from twodrl_bench.algorithms.variants import VariantTwoDimA2C
 
 
 def action_probabilities(model: TwoDimA2C, interest: float) -> np.ndarray:

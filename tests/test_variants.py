@@ -1,4 +1,4 @@
-"""The ablation's variants (``twodrl_bench.variants``): every arm builds and runs, and its
+"""The ablation's variants (``twodrl_bench.algorithms.variants``): every arm builds and runs, and its
 committed rows come back from its command (``docs/ablation.md``)."""
 
 from pathlib import Path
@@ -13,11 +13,16 @@ from sb3_twodrl import TwoDimA2C, TwoDimPPO
 from sb3_twodrl.common.policies import TEMPERATURE_ARGUMENTS
 from tests.test_sb3_contract import policy_save_load, strip_format
 from tests.toy_envs import LatticeCorridor
-from twodrl_bench.algos import algo_class
-from twodrl_bench.protocol import settings_algo
+from twodrl_bench.algorithms import algo_class
+from twodrl_bench.algorithms.variants import (
+    VARIANT_ARGUMENTS,
+    VariantActorCriticPolicy,
+    VariantTwoDimA2C,
+    VariantTwoDimPPO,
+)
 from twodrl_bench.runner import run_study
+from twodrl_bench.settings import settings_algo
 from twodrl_bench.spec import load_spec
-from twodrl_bench.variants import VARIANT_ARGUMENTS, VariantActorCriticPolicy, VariantTwoDimA2C, VariantTwoDimPPO
 
 BASE = {"a2c": {"n_envs": 2, "n_steps": 8}, "twoda2c": {"n_envs": 2, "n_steps": 8, "punishment_gamma": 0.1}}
 BASE |= {"ppo": {**BASE["a2c"], "batch_size": 16}, "twodppo": {**BASE["twoda2c"], "batch_size": 16}}

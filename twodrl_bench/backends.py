@@ -1,6 +1,6 @@
 """Where a study's jobs run: in this process, in local worker processes, or as Ray tasks.
 
-Every backend calls ``fn(**job)`` for each job (plain data in, rows out) where the job runs and hands
+Every backend calls ``fn(job)`` for each job (a picklable job in, rows out) where the job runs and hands
 each result to ``on_done(job, rows, machine)`` as soon as it arrives, in the driver; ``machine`` is
 :func:`~twodrl_bench.machine.machine_info` of the process that ran the job, taken after it (so with the
 torch threads it ran with). This is the only module of the project that starts worker processes or Ray tasks.
@@ -21,20 +21,20 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
+from twodrl_bench.experiment import Job
 from twodrl_bench.machine import REPRODUCIBLE_KERNELS, machine_info
 
 BACKENDS = ("process", "ray", "serial")
 RAY_RETRIES = 3
 """Retries of a Ray task whose worker process died (a lost node, a killed process); errors are not retried."""
 
-Job = dict[str, Any]
 Rows = list[dict[str, Any]]
 OnDone = Callable[[Job, Rows, dict[str, Any]], None]
 
 
 def run_one(fn: Callable[..., Rows], job: Job) -> tuple[Rows, dict[str, Any]]:
-    """``fn(**job)`` and the machine that ran it (what a worker process or Ray task executes)."""
-    rows = fn(**job)
+    """``fn(job)`` and the machine that ran it (what a worker process or Ray task executes)."""
+    rows = fn(job)
     return rows, machine_info()
 
 
@@ -46,7 +46,7 @@ def run_jobs(
     workers: int = 1,
     address: str | None = None,
 ) -> None:
-    """Run ``fn(**job)`` for every job on ``backend`` with ``workers`` at a time; ``on_done`` gets each result.
+    """Run ``fn(job)`` for every job on ``backend`` with ``workers`` at a time; ``on_done`` gets each result.
 
     :raises ValueError: for an unknown backend, a non-positive ``workers``, or ``address`` without Ray
     """

@@ -45,9 +45,10 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 
 def status(root: Path) -> str:
-    """One line per run folder under ``root`` (its spec.yml): jobs finished, running (epochs done) and pending."""
-    from twodrl_bench.epochs import progress_path
+    """One line per run folder under ``root`` (its spec.yml): jobs finished, running (epochs or timesteps done) and
+    pending."""
     from twodrl_bench.folders import read_spec, rows_path
+    from twodrl_bench.jobs import progress_path
 
     lines = []
     for path in sorted(root.rglob("spec.yml")):
@@ -59,8 +60,9 @@ def status(root: Path) -> str:
         for arm, seed in jobs:
             progress = progress_path(folder, f"{arm}_seed{seed}")
             if (arm, seed) not in done and progress.exists():
-                epochs = len(progress.read_text().split())
-                running.append(f"{arm}_seed{seed} {epochs}/{spec['protocol'].get('epochs', '?')}")
+                last = (progress.read_text().split() or ["0"])[-1]
+                length = spec["protocol"].get("epochs") or spec["protocol"].get("timesteps") or "?"
+                running.append(f"{arm}_seed{seed} {last}/{length}")
         line = f"{spec['name']} ({folder}): {len(done)}/{len(jobs)} jobs done"
         if running:
             line += "; started: " + ", ".join(running)

@@ -14,7 +14,8 @@ At the end the model is saved (``models/<arm>_seed<seed>.zip``, loadable by ``<A
 ``transfer`` protocol key (paper section 3.5) the saved policy then runs deterministic trials on another
 env (:func:`transfer_columns`), reported in the last epoch's row.
 
-:func:`run_job` is the study runner's entry (:mod:`twodrl_bench.runner`): plain data in, rows out.
+:func:`run` is the epoch protocol's job (:func:`twodrl_bench.runner.run_job`): a job in, rows out; checkpoints and
+resume are every job's (:func:`twodrl_bench.jobs.resume`).
 """
 
 from __future__ import annotations
@@ -36,40 +37,25 @@ from stable_baselines3.common.vec_env import VecEnv
 
 from sb3_twodrl.callbacks import NavigationMetricsCallback
 from sb3_twodrl.hyperparams import evaluate
-from twodrl_bench.algos import algo_class
-from twodrl_bench.checkpoint import load_checkpoint, save_checkpoint, set_rng_state
-from twodrl_bench.protocol import LEARNING, METRICS, RunSpec, trial_seed
+from twodrl_bench import jobs
+from twodrl_bench.algorithms import algo_class
+from twodrl_bench.checkpoint import set_rng_state
+from twodrl_bench.experiment import PAPER_TRIALS, TRANSFER_SEED, Job
+from twodrl_bench.protocol import LEARNING, METRICS, trial_seed
 from twodrl_bench.trials import run_test_trials, tally, trial_outcomes
 from twodrl_bench.vec_env import make_test_env, make_train_env
 
 Row = dict[str, Any]
-PAPER_TRIALS = 10
-"""Trials on the real robot per policy in the paper (section 3.5): the first of a transfer's trials."""
-TRANSFER_SEED = 1_000_003
-"""The held-out seed of a transfer's trials (sub-env ``i`` seeded ``seed + i``); its own env's: ``seed + 10**4``."""
 OWN_TRIALS = 10
 """Trials of a transferred policy in its own training env (did it learn at all?)."""
-
-
-def checkpoint_path(out_dir: str | Path, name: str) -> Path:
-    return Path(out_dir) / "checkpoints" / f"{name}.pkl"
-
-
-def model_path(out_dir: str | Path, name: str) -> Path:
-    return Path(out_dir) / "models" / f"{name}.zip"
-
-
-def progress_path(out_dir: str | Path, name: str) -> Path:
-    """One line per finished epoch of a running job: what ``sb3-twodrl-bench status`` reads."""
-    return Path(out_dir) / "progress" / f"{name}.txt"
 
 
 class EpochCallback(BaseCallback):
     """Epochs of K learning trials, each followed by the M test trials; checkpoints; stops after the last."""
 
-    def __init__(self, spec: RunSpec, test_env: VecEnv, nav: NavigationMetricsCallback, state: dict[str, Any]):
+    def __init__(self, job: Job, test_env: VecEnv, nav: NavigationMetricsCallback, state: dict[str, Any]):
         super().__init__()
-        self.spec, self.test_env, self.nav, self.state = spec, test_env, nav, state
+        self.job, self.protocol, self.test_env, self.nav, self.state = job, job.protocol, test_env, nav, state
         self._clock = time.perf_counter()
         self._rng: dict[str, Any] | None = state.pop("rng", None)
 
@@ -84,12 +70,11 @@ class EpochCallback(BaseCallback):
         return self.state["elapsed"] + time.perf_counter() - self._clock
 
     def _on_rollout_start(self) -> None:
-        s, every = self.state, self.spec.checkpoint_every
-        if every and s["epoch"] - s["checkpoint_epoch"] >= every and s["epoch"] < self.spec.epochs:
+        s, every = self.state, self.protocol.checkpoint_every
+        if every and s["epoch"] - s["checkpoint_epoch"] >= every and s["epoch"] < self.protocol.epochs:
             s["checkpoint_epoch"] = s["epoch"]
             nav = (self.nav.episodes, self.nav.total_episodes, self.nav._tracker)
-            extra = {**s, "elapsed": self.elapsed(), "nav": nav}
-            save_checkpoint(checkpoint_path(self.spec.out_dir, self.spec.name), self.model, extra)
+            jobs.save(self.job, self.model, {**s, "elapsed": self.elapsed(), "nav": nav})
 
     def _on_rollout_end(self) -> None:
         """Tally the rollout's temperatures (2D-RL algorithms: ``inverse_temperatures`` in the buffer)."""
@@ -110,17 +95,17 @@ class EpochCallback(BaseCallback):
         return dict(zip(LEARNING, (share, temperature / tempered if tempered else math.nan), strict=True))
 
     def _on_step(self) -> bool:
-        s, spec = self.state, self.spec
+        s, job, protocol = self.state, self.job, self.protocol
         s["episodes"] += int(np.sum(self.locals["dones"]))
-        while s["episodes"] >= (s["epoch"] + 1) * spec.learn_episodes and s["epoch"] < spec.epochs:
+        while s["episodes"] >= (s["epoch"] + 1) * protocol.learn_episodes and s["epoch"] < protocol.epochs:
             s["epoch"] += 1
-            metrics = run_test_trials(self.model, self.test_env, trial_seed(spec.seed, s["epoch"]))
+            metrics = run_test_trials(self.model, self.test_env, trial_seed(job.seed, s["epoch"]))
             row = {
-                "env": spec.env_id,
-                "algo": spec.algo,
-                "seed": spec.seed,
+                "env": job.experiment.env,
+                "algo": job.arm.algo,
+                "seed": job.seed,
                 "epoch": s["epoch"],
-                "learn_episodes": s["epoch"] * spec.learn_episodes,
+                "learn_episodes": s["epoch"] * protocol.learn_episodes,
                 **{key: metrics.get(key, math.nan) for key in METRICS},
                 **self._learning_metrics(),
                 **coefficient_columns(self.model),
@@ -132,13 +117,13 @@ class EpochCallback(BaseCallback):
                 self.logger.record(f"test/{key}", row[key])
             self.logger.record("test/epoch", s["epoch"])
             self.logger.dump(self.num_timesteps)
-            with progress_path(spec.out_dir, spec.name).open("a") as f:
+            with jobs.progress_path(job.out_dir, job.name).open("a") as f:
                 f.write(f"{s['epoch']}\n")
-        return s["epoch"] < spec.epochs
+        return s["epoch"] < protocol.epochs
 
 
 def coefficient_columns(model: BaseAlgorithm) -> dict[str, float]:
-    """For a learned entropy coefficient (:mod:`twodrl_bench.auto_entropy`): ``ent_coef`` and
+    """For a learned entropy coefficient (:mod:`twodrl_bench.algorithms.auto_entropy`): ``ent_coef`` and
     ``entropy_fraction`` of the last update; none for a fixed coefficient."""
     if not getattr(model, "ent_coef_auto", False):
         return {}
@@ -146,44 +131,46 @@ def coefficient_columns(model: BaseAlgorithm) -> dict[str, float]:
     return {"ent_coef": latest[1], "entropy_fraction": latest[2]}
 
 
-def _new_model(spec: RunSpec) -> BaseAlgorithm:
-    set_random_seed(spec.seed)
-    hp = copy.deepcopy(spec.hyperparams)  # SB3 fills in policy_kwargs in place (A2C's RMSprop)
+def _new_model(job: Job) -> BaseAlgorithm:
+    set_random_seed(job.seed)
+    hp = copy.deepcopy(job.arm.hyperparams)  # SB3 fills in policy_kwargs in place (A2C's RMSprop)
+    if isinstance(hp.get("policy_kwargs"), str):
+        hp["policy_kwargs"] = evaluate(hp["policy_kwargs"])
     n_envs = int(hp.pop("n_envs", 1))
     policy = hp.pop("policy", "MlpPolicy")
-    env = make_train_env(spec.env_id, n_envs, spec.seed, spec.vec_env, spec.env_kwargs)
-    tb = str(Path(spec.out_dir) / "tb") if spec.tensorboard else None
-    return algo_class(spec.algo)(policy, env, seed=spec.seed, device="cpu", tensorboard_log=tb, **hp)
+    experiment, protocol = job.experiment, job.protocol
+    env = make_train_env(experiment.env, n_envs, job.seed, protocol.vec_env, experiment.env_kwargs)
+    tb = str(Path(job.out_dir) / "tb") if protocol.tensorboard else None
+    return algo_class(job.arm.algo)(policy, env, seed=job.seed, device="cpu", tensorboard_log=tb, **hp)
 
 
-def run_pair(spec: RunSpec) -> list[Row]:
-    """Train ``spec.algo`` with ``spec.seed`` for ``spec.epochs`` epochs (resuming a checkpoint); the CSV rows."""
-    for package in spec.gym_packages:
+def train(job: Job) -> list[Row]:
+    """Train ``job``'s arm for its protocol's epochs (resuming its checkpoint, :func:`twodrl_bench.jobs.resume`);
+    the CSV rows. The last checkpoint stays: a longer run of the same job extends it."""
+    experiment, protocol = job.experiment, job.protocol
+    for package in experiment.gym_packages:
         importlib.import_module(package)
     th.set_num_threads(1)
-    ckpt = checkpoint_path(spec.out_dir, spec.name)
-    progress = progress_path(spec.out_dir, spec.name)
+    progress = jobs.progress_path(job.out_dir, job.name)
     progress.parent.mkdir(parents=True, exist_ok=True)
-    if ckpt.exists():
-        model, rng, state = load_checkpoint(ckpt)
-        if state["protocol"] != spec.protocol():
-            raise ValueError(f"{ckpt} was written by another protocol: {state['protocol']} != {spec.protocol()}")
+    resumed = jobs.resume(job)
+    if resumed is not None:
+        model, rng, state = resumed
         state["rng"] = rng
     else:
-        model = _new_model(spec)
-        state = {"protocol": spec.protocol(), "episodes": 0, "epoch": 0, "checkpoint_epoch": 0, "rows": []}
-        state["elapsed"] = 0.0
-        if spec.tensorboard:  # an interrupted attempt that left no checkpoint
-            for stale in (Path(spec.out_dir) / "tb").glob(f"{spec.name}_*"):
+        model = _new_model(job)
+        state = {"episodes": 0, "epoch": 0, "checkpoint_epoch": 0, "rows": [], "elapsed": 0.0}
+        if protocol.tensorboard:  # an interrupted attempt that left no checkpoint
+            for stale in (Path(job.out_dir) / "tb").glob(f"{job.name}_*"):
                 shutil.rmtree(stale, ignore_errors=True)
     progress.write_text("".join(f"{row['epoch']}\n" for row in state["rows"]))
-    test_env = make_test_env(spec.env_id, spec.test_episodes, spec.vec_env, spec.env_kwargs)
+    test_env = make_test_env(experiment.env, protocol.test_episodes, protocol.vec_env, experiment.env_kwargs)
     nav = NavigationMetricsCallback()
-    epochs = EpochCallback(spec, test_env, nav, state)
-    if state["epoch"] < spec.epochs:
-        model.learn(10**15, callback=[nav, epochs], tb_log_name=spec.name, log_interval=100, reset_num_timesteps=False)
-    if spec.save_model:
-        path = model_path(spec.out_dir, spec.name)
+    epochs = EpochCallback(job, test_env, nav, state)
+    if state["epoch"] < protocol.epochs:
+        model.learn(10**15, callback=[nav, epochs], tb_log_name=job.name, log_interval=100, reset_num_timesteps=False)
+    if protocol.save_model:
+        path = jobs.model_path(job.out_dir, job.name)
         path.parent.mkdir(parents=True, exist_ok=True)
         model.save(path)
     model.get_env().close()
@@ -191,47 +178,15 @@ def run_pair(spec: RunSpec) -> list[Row]:
     return state["rows"]
 
 
-def run_job(
-    arm: dict[str, Any],
-    env: str,
-    env_kwargs: dict[str, Any],
-    protocol: dict[str, Any],
-    seed: int,
-    out_dir: str,
-    gym_packages: list[str],
-) -> list[Row]:
-    """The rows of one (arm, seed) of an epoch protocol: :func:`run_pair` of the arm's resolved settings.
-
-    ``arm``: ``{"name", "algo", "hyperparams"}`` (:func:`twodrl_bench.spec.resolve`; a ``policy_kwargs``
-    string is evaluated by :func:`sb3_twodrl.hyperparams.evaluate`); ``protocol``: ``{epochs, learn_episodes,
-    test_episodes, vec_env, checkpoint_every, save_model, tensorboard}``. Each row starts with the arm's name.
-    """
-    hyperparams = dict(arm["hyperparams"])
-    if isinstance(hyperparams.get("policy_kwargs"), str):
-        hyperparams["policy_kwargs"] = evaluate(hyperparams["policy_kwargs"])
-    spec = RunSpec(
-        env_id=env,
-        algo=arm["algo"],
-        seed=seed,
-        epochs=protocol["epochs"],
-        learn_episodes=protocol["learn_episodes"],
-        test_episodes=protocol["test_episodes"],
-        hyperparams=hyperparams,
-        out_dir=out_dir,
-        gym_packages=list(gym_packages),
-        vec_env=protocol["vec_env"],
-        checkpoint_every=protocol["checkpoint_every"],
-        save_model=protocol["save_model"],
-        tensorboard=protocol["tensorboard"],
-        env_kwargs=dict(env_kwargs),
-        label=arm["name"],
-    )
-    rows = [{"arm": arm["name"], **row} for row in run_pair(spec)]
-    if protocol.get("transfer"):
-        model = algo_class(spec.algo).load(model_path(out_dir, spec.name), device="cpu")
-        rows[-1].update(transfer_columns(model, env, dict(env_kwargs), protocol["transfer"]))
-    checkpoint_path(out_dir, spec.name).unlink(missing_ok=True)
-    progress_path(out_dir, spec.name).unlink(missing_ok=True)
+def run(job: Job) -> list[Row]:
+    """The rows of ``job`` (an arm and seed of an epoch protocol): :func:`train`, then its transfer trials if its
+    protocol has a ``transfer``; each row starts with the arm's name."""
+    rows = [{"arm": job.arm_name, **row} for row in train(job)]
+    transfer = job.protocol.transfer
+    if transfer:
+        model = algo_class(job.arm.algo).load(jobs.model_path(job.out_dir, job.name), device="cpu")
+        rows[-1].update(transfer_columns(model, job.experiment.env, dict(job.experiment.env_kwargs), transfer))
+    jobs.finish(job)
     return rows
 
 

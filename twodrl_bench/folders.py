@@ -41,12 +41,14 @@ def read_spec(folder: str | Path) -> Spec | None:
 
 
 def collect(folder: str | Path):
-    """Every rows file of ``folder`` as one DataFrame, sorted by arm, seed (and epoch), written to ``rows.csv``."""
+    """Every rows file of ``folder`` as one DataFrame, sorted by arm, seed (and epoch), written to ``rows.csv``; a
+    folder without rows files (a study's copy under ``results/``) gives its ``rows.csv`` as it is."""
     import pandas as pd
 
     files = sorted((Path(folder) / "rows").glob("*.csv"))
     if not files:
-        return pd.DataFrame()
+        collected = Path(folder) / "rows.csv"
+        return pd.read_csv(collected) if collected.is_file() else pd.DataFrame()
     df = pd.concat([pd.read_csv(f) for f in files], ignore_index=True)
     keys = [k for k in ("arm", "seed", "epoch") if k in df.columns]
     df = df.sort_values(keys, kind="stable").reset_index(drop=True)

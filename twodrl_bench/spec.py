@@ -1,19 +1,15 @@
 """Studies as data: a spec (a YAML file) names an env, a protocol, seeds and arms; this module loads,
-validates, resolves and compares specs.
+validates and compares specs (the YAML layer; :mod:`twodrl_bench.experiment` resolves a spec into the study object).
 
 A spec is packaged as ``twodrl_bench/specs/<study>.yml`` or, for a study of several parts,
 ``twodrl_bench/specs/<study>/<part>.yml``; its name is that path without ``.yml``. Fields
 (``docs/studies.md``): ``name``, ``env``, ``env_kwargs`` ({}), ``gym_packages`` ([twodrl_envs]), ``protocol``
-(the paper's epochs ``{epochs, learn_episodes, test_episodes}`` or ``{timesteps, eval_episodes}``),
-``seeds``, ``arms`` (name -> ``{algo, override, settings}``) and/or ``grid`` (points that expand into arms,
-kept in the spec for the report),
+(the paper's epochs ``{epochs, learn_episodes, test_episodes}`` or ``{timesteps, eval_episodes}``, completed
+with the defaults of :class:`~twodrl_bench.experiment.EpochProtocol` or
+:class:`~twodrl_bench.experiment.TimestepsProtocol`), ``seeds``, ``arms`` (name -> ``{algo, override,
+settings}``) and/or ``grid`` (points that expand into arms, kept in the spec for the report),
 ``rules`` (free-form, read by the report) and ``report`` (a module of :mod:`twodrl_bench.reports`, or a dotted
 path; optional, default None: the runner writes the rows only).
-
-*Resolving* a spec reads each arm's settings (the env's entry of ``<algo>.yml``, packaged or in the
-arm's ``settings`` folder) and applies its overrides; the resolved spec also records the algorithms'
-constructor defaults in force. Two resolved specs that differ in what decides the rows (:func:`guard_diff`)
-must not share a run folder.
 """
 
 from __future__ import annotations
@@ -27,27 +23,9 @@ from typing import Any
 
 import yaml
 
-from sb3_twodrl.hyperparams import hyperparams_path
-
 Spec = dict[str, Any]
 
 FIELDS = ("name", "env", "env_kwargs", "gym_packages", "protocol", "seeds", "arms", "grid", "rules", "report")
-EPOCH_PROTOCOL = {
-    "epochs": None,
-    "learn_episodes": None,
-    "test_episodes": None,
-    "vec_env": "auto",
-    "checkpoint_every": 10,
-    "save_model": True,
-    "tensorboard": True,
-    "transfer": None,
-}
-"""The epoch protocol's keys and their defaults (``None``: required, ``transfer`` optional)."""
-TIMESTEPS_REQUIRED = ("timesteps", "eval_episodes")
-RUN_OPTIONS = ("checkpoint_every", "save_model", "tensorboard")
-"""Protocol keys that change what a run keeps, not its rows: free to change between invocations."""
-FREE = ("name", "rules", "report", "seeds")
-"""Top-level fields that may change between invocations on one folder (seeds may be added)."""
 _ARM_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.=+-]*$")
 
 
@@ -145,47 +123,13 @@ def validate(raw: Any, source: str = "spec") -> Spec:
 
 
 def _protocol(source: str, protocol: Any) -> dict[str, Any]:
-    protocol = dict(_mapping(source, "protocol", protocol))
-    if "epochs" in protocol:
-        unknown = sorted(set(protocol) - set(EPOCH_PROTOCOL))
-        if unknown:
-            raise _fail(source, "protocol", f"of epochs takes only {list(EPOCH_PROTOCOL)}", unknown)
-        out = {key: protocol.get(key, default) for key, default in EPOCH_PROTOCOL.items()}
-        for key in ("epochs", "learn_episodes", "test_episodes"):
-            if key not in protocol:
-                raise ValueError(f"{source}: protocol.{key} is missing (protocol: {protocol!r})")
-            _positive_int(source, f"protocol.{key}", out[key])
-        _positive_int(source, "protocol.checkpoint_every", out["checkpoint_every"], zero=True)
-        if out["transfer"] is None:
-            del out["transfer"]
-        else:
-            out["transfer"] = _transfer(source, out["transfer"], out["save_model"])
-        return out
-    if all(key in protocol for key in TIMESTEPS_REQUIRED):
-        if protocol["timesteps"] is not None:
-            _positive_int(source, "protocol.timesteps", protocol["timesteps"])
-        _positive_int(source, "protocol.eval_episodes", protocol["eval_episodes"])
-        return protocol
-    raise _fail(
-        source, "protocol", "must be {epochs, learn_episodes, test_episodes} or {timesteps, eval_episodes}", protocol
-    )
+    """The protocol mapping completed with its defaults (:func:`twodrl_bench.experiment.protocol_of`)."""
+    from twodrl_bench.experiment import protocol_of
 
-
-def _transfer(source: str, transfer: Any, save_model: bool) -> dict[str, Any]:
-    """``{env, trials, seed}`` of a transfer (seed defaults to the held-out one), checked."""
-    from twodrl_bench.epochs import PAPER_TRIALS, TRANSFER_SEED
-
-    key = "protocol.transfer"
-    transfer = dict(_mapping(source, key, transfer))
-    if not {"env", "trials"} <= set(transfer) <= {"env", "trials", "seed"} or not isinstance(transfer["env"], str):
-        raise _fail(source, key, "must be {env: <Gymnasium ID>, trials: <int>, seed: <int>}", transfer)
-    if _positive_int(source, f"{key}.trials", transfer["trials"]) < PAPER_TRIALS:
-        raise _fail(source, f"{key}.trials", f"must be at least the paper's {PAPER_TRIALS}", transfer["trials"])
-    transfer.setdefault("seed", TRANSFER_SEED)
-    _positive_int(source, f"{key}.seed", transfer["seed"], zero=True)
-    if not save_model:
-        raise _fail(source, "protocol.save_model", "must be true with a transfer (its trials load the model)", False)
-    return transfer
+    try:
+        return protocol_of(protocol).as_dict()
+    except ValueError as error:
+        raise ValueError(f"{source}: {error}") from None
 
 
 def _arm(source: str, name: Any, arm: Any) -> dict[str, Any]:
@@ -195,7 +139,7 @@ def _arm(source: str, name: Any, arm: Any) -> dict[str, Any]:
     unknown = sorted(set(arm) - {"algo", "override", "settings"})
     if unknown:
         raise _fail(source, f"arms.{name}", "takes only algo, override and settings", unknown)
-    from twodrl_bench.algos import ALGOS
+    from twodrl_bench.algorithms import ALGOS
 
     if arm.get("algo") not in ALGOS:
         raise _fail(source, f"arms.{name}.algo", f"must be one of {sorted(ALGOS)}", arm.get("algo"))
@@ -230,36 +174,6 @@ def _expand_grid(source: str, grid: Any) -> dict[str, dict[str, Any]]:
     return arms
 
 
-def resolve(spec: Spec) -> Spec:
-    """``spec`` with each arm's ``hyperparams`` and ``defaults`` (the constructor defaults in force, as ``repr``).
-
-    Epochs: the env's entry of the arm's settings file, rl-zoo3's keys dropped, overrides applied. Timesteps:
-    ``twodrl_bench.timesteps.resolve_arm``'s entry (rl-zoo3's files among the settings).
-
-    :raises ValueError: if a settings file or its entry for the env is missing, or (epochs) holds a schedule
-    """
-    from twodrl_bench.protocol import check_constants, class_defaults, epoch_entry, settings_algo
-
-    out = copy.deepcopy(spec)
-    epochs = "epochs" in spec["protocol"]
-    for name, arm in out["arms"].items():
-        if not epochs:  # the timesteps job's own entries (rl-zoo3's files among them)
-            from twodrl_bench.timesteps import resolve_arm
-
-            arm["hyperparams"] = resolve_arm(arm, spec["env"], spec["protocol"])
-            arm["defaults"] = class_defaults(arm["algo"], arm["hyperparams"])
-            continue
-        folder = None if arm["settings"] == "packaged" else arm["settings"]
-        hyperparams = {
-            **epoch_entry(hyperparams_path(settings_algo(arm["algo"]), folder), spec["env"]),
-            **arm["override"],
-        }
-        check_constants(hyperparams, f"arms.{name}")
-        arm["hyperparams"] = hyperparams
-        arm["defaults"] = class_defaults(arm["algo"], hyperparams)
-    return out
-
-
 def diff(old: Any, new: Any, path: str = "") -> list[str]:
     """Every key path where ``old`` and ``new`` differ, as ``path: old != new`` (a missing key shows as <absent>)."""
     if isinstance(old, dict) and isinstance(new, dict):
@@ -283,28 +197,6 @@ class _Absent:
 
 
 _ABSENT = _Absent()
-
-
-def guard_diff(stored: Spec, new: Spec) -> list[str]:
-    """What differs between two resolved specs in what decides the rows: every field but :data:`FREE`, the
-    protocol's :data:`RUN_OPTIONS` and arms that only one of them has (arms and seeds may be added)."""
-
-    def deciding(spec: Spec, arms: set[str]) -> dict[str, Any]:
-        out = {k: v for k, v in spec.items() if k not in FREE}
-        out["protocol"] = {k: v for k, v in spec["protocol"].items() if k not in RUN_OPTIONS}
-        out["arms"] = {k: v for k, v in spec["arms"].items() if k in arms}
-        return out
-
-    common = set(stored["arms"]) & set(new["arms"])
-    return diff(deciding(stored, common), deciding(new, common))
-
-
-def merge(stored: Spec, new: Spec) -> Spec:
-    """``new`` with the arms and seeds only ``stored`` has (what a folder holds after both ran into it)."""
-    out = copy.deepcopy(new)
-    out["arms"] = {**copy.deepcopy(stored["arms"]), **out["arms"]}
-    out["seeds"] = sorted(set(stored["seeds"]) | set(new["seeds"]))
-    return out
 
 
 def dump(spec: Spec) -> str:

@@ -1,10 +1,12 @@
-"""The timesteps job: one (arm, seed) trained with rl-zoo3 itself, then a final deterministic evaluation.
+"""The timesteps job: one (arm, seed) trained by rl-zoo3's ``ExperimentManager``, then a final deterministic evaluation.
 
-:func:`run_job` is the job function of a spec whose protocol is ``{timesteps, eval_episodes}``. The arm trains
-with ``rl_zoo3.train`` at its settings' entry; the training envs' ``Monitor`` records every training episode's
-return and punishment events, from which come the learning curve and the training event rates; the final model
-then runs ``eval_episodes`` deterministic episodes on a fresh env seeded ``EVAL_SEED + seed``, apart from
-training (with the run's ``VecNormalize`` statistics, frozen, where the entry normalises).
+:func:`run` is the job of an experiment whose protocol is :class:`~twodrl_bench.experiment.TimestepsProtocol`. The
+arm's model and envs are made as ``rl_zoo3.train`` makes them, from its resolved entry; the training envs'
+``Monitor`` records every training episode's return and punishment events, from which come the learning curve and
+the training event rates; the final model then runs ``eval_episodes`` deterministic episodes on a fresh env seeded
+``EVAL_SEED + seed``, apart from training (with the run's ``VecNormalize`` statistics, frozen, where the entry
+normalises). Training is checkpointed every ``checkpoint_every`` timesteps and resumed as every job is
+(:mod:`twodrl_bench.jobs`); the ``Monitor`` files are cut back to the checkpoint on resume.
 
 Keys this job reads, beside the fields every spec has:
 
@@ -15,18 +17,17 @@ Keys this job reads, beside the fields every spec has:
 - ``protocol.entry`` (optional): the name of the settings entry both arms read (default: the spec's ``env``),
   e.g. rl-zoo3's ``CartPole-v1`` entry for ``CliffWalkingSplit-v1``, which has none of its own.
 - ``protocol.task`` (optional): the rows' ``task`` label (default: the spec's ``env``).
-- ``arms.<name>.settings``: ``packaged`` (default: :mod:`sb3_twodrl.hyperparams`' ``<algo>.yml``), ``rl-zoo3``
-  (rl-zoo3's own ``hyperparams/<algo>.yml``, of the stock algorithm for a 2D-RL one: :data:`STOCK`) or a folder
-  of ``<algo>.yml``; ``arms.<name>.override``: settings over the entry (the 2D-RL arguments, a budget, ...).
+- ``arms.<name>.settings``: ``packaged`` (default), ``rl-zoo3`` or a folder
+  (:func:`twodrl_bench.settings.settings_file`); ``arms.<name>.override``: settings over the entry.
 
-Resolving a spec's timesteps arm is :func:`resolve_arm`; the job gets the arm as the runner passes it, ``{name,
-algo, hyperparams}`` (``name`` the rows' ``arm`` label, ``hyperparams`` :func:`resolve_arm`'s entry).
+Resolving a spec's timesteps arm is :func:`resolve_arm`; :func:`run_job` runs a job given as plain data.
 
 Requires the ``zoo`` extra.
 """
 
 from __future__ import annotations
 
+import argparse
 import copy
 import csv
 import importlib
@@ -38,88 +39,43 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import yaml
+from stable_baselines3.common.base_class import BaseAlgorithm
+from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.monitor import Monitor, ResultsWriter
+
+from twodrl_bench import jobs
+from twodrl_bench.experiment import Arm, Experiment, Job, TimestepsProtocol
+from twodrl_bench.settings import check_entry, timesteps_entry
+from twodrl_bench.settings import settings_file as settings_file_of
 
 Row = dict[str, Any]
-STOCK = {"twoda2c": "a2c", "twodppo": "ppo"}
-"""The stock algorithm of each 2D-RL algorithm: whose rl-zoo3 entry it reads (a ``<algo>_auto`` arm: its
-``<algo>``'s, :func:`twodrl_bench.protocol.settings_algo`)."""
 EVAL_SEED = 10**6
 """Seed of the evaluation env, plus the training seed: apart from the training seeds."""
 CURVE_BINS = 20
 """Learning-curve points: training episodes binned by the timestep at which they ended."""
-PROTOCOL_KEYS = ("timesteps", "eval_episodes", "events", "entry", "task")
 
 
-def check_protocol(protocol: dict[str, Any]) -> None:
-    """:raises ValueError: naming the key, for an unknown key or a bad budget, episode count or label"""
-    unknown = sorted(set(protocol) - set(PROTOCOL_KEYS))
-    if unknown:
-        raise ValueError(f"protocol: the timesteps protocol takes only {list(PROTOCOL_KEYS)}, got {unknown}")
-    timesteps = protocol.get("timesteps")
-    if timesteps is not None and (not isinstance(timesteps, int) or isinstance(timesteps, bool) or timesteps < 1):
-        raise ValueError(f"protocol.timesteps must be an int >= 1 or null, got {timesteps!r}")
-    episodes = protocol.get("eval_episodes")
-    if not isinstance(episodes, int) or isinstance(episodes, bool) or episodes < 1:
-        raise ValueError(f"protocol.eval_episodes must be an int >= 1, got {episodes!r}")
-    for key in ("events", "entry", "task"):
-        if protocol.get(key) is not None and not isinstance(protocol[key], str):
-            raise ValueError(f"protocol.{key} must be a string or null, got {protocol[key]!r}")
+def check_protocol(protocol: dict[str, Any]) -> TimestepsProtocol:
+    """The timesteps protocol of a spec's ``protocol`` mapping.
+
+    :raises ValueError: naming the key, for an unknown key or a bad budget, episode count or label
+    """
+    return TimestepsProtocol.from_mapping(protocol)
 
 
 def settings_file(arm: dict[str, Any]) -> Path:
-    """The rl-zoo3 hyperparameter file ``arm`` reads (see the module docstring: ``settings``).
+    """The rl-zoo3 hyperparameter file ``arm`` reads (:func:`twodrl_bench.settings.settings_file`).
 
     :raises ValueError: if the file does not exist
     """
-    from sb3_twodrl.hyperparams import hyperparams_path
-    from twodrl_bench.protocol import settings_algo
-
-    settings, algo = arm.get("settings", "packaged"), settings_algo(arm["algo"])
-    if settings == "rl-zoo3":
-        import rl_zoo3
-
-        algo = STOCK.get(algo, algo)
-        path = Path(rl_zoo3.__file__).parent / "hyperparams" / f"{algo}.yml"
-        if not path.is_file():
-            raise ValueError(f"settings: rl-zoo3 has no hyperparameter file for {algo!r} ({path})")
-        return path
-    return hyperparams_path(algo, None if settings == "packaged" else settings)
+    return settings_file_of(arm["algo"], arm.get("settings", "packaged"))
 
 
 def resolve_arm(arm: dict[str, Any], env: str, protocol: dict[str, Any]) -> dict[str, Any]:
-    """The rl-zoo3 entry ``arm`` trains with: its settings' entry (``protocol.entry``, else ``env``), the arm's
-    ``override`` over it, and the ``Monitor`` key of ``protocol.events``.
-
-    :raises ValueError: if the file or entry is missing, or if a 2D-RL arm that reads ``info`` would see rewards
-        that ``VecNormalize`` rescales (its ``r_R = reward + info["punishment"]`` would mix two scales)
-    """
-    from sb3_twodrl.hyperparams import read_entry
-
-    if not isinstance(arm, dict) or not isinstance(arm.get("algo"), str):
-        raise ValueError(f"arm must be a mapping with an 'algo' name, got {arm!r}")
-    entry = {**read_entry(settings_file(arm), protocol.get("entry") or env), **(arm.get("override") or {})}
-    if protocol.get("events"):
-        entry["monitor_kwargs"] = monitor_kwargs(protocol["events"])
-    check_entry(arm["algo"], entry, protocol)
-    return entry
-
-
-def monitor_kwargs(events: str) -> str:
-    """The entry's ``monitor_kwargs`` that make the training envs' ``Monitor`` record the ``events`` info key."""
-    return f"dict(info_keywords=('{events}',))"
-
-
-def check_entry(name: str, entry: dict[str, Any], protocol: dict[str, Any]) -> None:
-    """:raises ValueError: if the ``Monitor`` does not record ``protocol.events``, or if a 2D-RL arm that reads
-    ``info`` would see rewards that ``VecNormalize`` rescales (its ``r_R = reward + info["punishment"]`` would mix
-    two scales)"""
-    events = protocol.get("events")
-    if events and entry.get("monitor_kwargs") != monitor_kwargs(events):
-        raise ValueError(f"arm {name!r}: monitor_kwargs must record {events!r} (resolve the arm with resolve_arm)")
-    normalize = entry.get("normalize", False)
-    scaled = normalize if isinstance(normalize, bool) else "'norm_reward': False" not in normalize
-    if scaled and entry.get("reward_split") in ("info", "cost"):
-        raise ValueError(f"arm {name!r}: the entry normalises rewards, which reward_split='info' cannot split")
+    """The rl-zoo3 entry ``arm`` (a spec's ``{algo, override, settings}``) trains with on ``env`` under ``protocol``
+    (:func:`twodrl_bench.settings.timesteps_entry`, what the study object resolves a timesteps arm to)."""
+    return timesteps_entry(arm, env, protocol)
 
 
 def training_episodes(run_dir: Path, n_envs: int, events: str | None) -> np.ndarray:
@@ -173,6 +129,182 @@ def evaluate(model: Any, env: Any, episodes: int, events: str | None) -> dict[st
     }
 
 
+def _monitors(model: BaseAlgorithm) -> list[Monitor]:
+    """The ``Monitor`` of each training env of ``model``, in env order."""
+    monitors = []
+    for env in model.get_env().unwrapped.envs:
+        while not isinstance(env, Monitor):
+            env = env.env
+        monitors.append(env)
+    return monitors
+
+
+class Checkpoints(BaseCallback):
+    """Checkpoints the job every ``protocol.checkpoint_every`` timesteps, at a rollout's start (a clean boundary:
+    the update of the last rollout done), with the sizes of the ``Monitor`` files then; the files' open writers
+    are left out of the checkpoint (:func:`restore_monitors` reopens them)."""
+
+    def __init__(self, job: Job, state: dict[str, Any], budget: int):
+        super().__init__()
+        self.job, self.state, self.budget = job, state, budget
+        self._clock = time.perf_counter()
+
+    def _on_rollout_start(self) -> None:
+        every, done = self.job.protocol.checkpoint_every, self.num_timesteps
+        if not every or done - self.state["checkpoint_at"] < every or done >= self.budget:
+            return
+        self.state["checkpoint_at"] = done
+        monitors = _monitors(self.model)
+        writers = [m.results_writer for m in monitors]
+        files = [w.file_handler.name for w in writers]
+        elapsed = self.state["elapsed"] + time.perf_counter() - self._clock
+        try:
+            for monitor in monitors:
+                monitor.results_writer = None  # an open file: not pickled
+            extra = {**self.state, "elapsed": elapsed, "monitors": [(f, Path(f).stat().st_size) for f in files]}
+            jobs.save(self.job, self.model, extra)
+        finally:
+            for monitor, writer in zip(monitors, writers, strict=True):
+                monitor.results_writer = writer
+        with jobs.progress_path(self.job.out_dir, self.job.name).open("a") as f:
+            f.write(f"{done}\n")
+
+    def _on_step(self) -> bool:
+        return True
+
+
+def restore_monitors(model: BaseAlgorithm, files: list[tuple[str, int]]) -> None:
+    """Cut each training env's ``Monitor`` file back to its size at the checkpoint and append to it again."""
+    for monitor, (name, size) in zip(_monitors(model), files, strict=True):
+        with open(name, "r+b") as f:
+            f.truncate(size)
+        keys = (*monitor.reset_keywords, *monitor.info_keywords)
+        monitor.results_writer = ResultsWriter(name, extra_keys=keys, override_existing=False)
+
+
+def _new_model(job: Job, entry: dict[str, Any], log: Path) -> tuple[BaseAlgorithm, Path]:
+    """``job``'s model and env as rl-zoo3's ``train`` makes them (seed, ``ExperimentManager``), its run folder."""
+    from rl_zoo3.exp_manager import ExperimentManager
+    from stable_baselines3.common.utils import set_random_seed
+
+    algo, env, seed = job.arm.algo, job.experiment.env, job.seed
+    shutil.rmtree(log, ignore_errors=True)  # what an interrupted attempt without a checkpoint left
+    log.mkdir(parents=True)
+    conf = log / f"{algo}.yml"
+    conf.write_text(yaml.safe_dump({env: entry}))
+    timesteps = job.protocol.timesteps or -1
+    options = {"algo": algo, "env": env, "seed": seed, "n_timesteps": timesteps, "conf_file": str(conf)}
+    set_random_seed(seed)
+    manager = ExperimentManager(
+        argparse.Namespace(**options, log_folder=str(log), vec_env="dummy", device="cpu", eval_freq=-1),
+        algo,
+        env,
+        str(log),
+        n_timesteps=timesteps,
+        eval_freq=-1,
+        seed=seed,
+        log_interval=-1,
+        vec_env_type="dummy",
+        device="cpu",
+        config=str(conf),
+    )
+    model, _ = manager.setup_experiment()
+    return model, Path(manager.save_path)
+
+
+def run(job: Job) -> list[Row]:
+    """Train ``job``'s arm with rl-zoo3's ``ExperimentManager`` (its logs in ``<out_dir>/zoo/<arm>_seed<seed>``),
+    checkpointed (:class:`Checkpoints`) and resumed (:func:`twodrl_bench.jobs.resume`) as every job is, then
+    evaluate the final model; its one row.
+
+    The row: ``task``, ``env``, ``arm``, ``seed``, ``n_timesteps``; the final evaluation's ``final_return`` (mean),
+    ``final_return_std``, ``final_length``, ``final_events`` (per episode), ``final_event_share``; over the
+    training episodes ``train_episodes``, ``train_return``, ``train_events_per_episode``, ``train_event_share``;
+    ``curve`` (:func:`learning_curve` as JSON text, so that the row is flat); for an arm whose entropy coefficient
+    is learned (:mod:`twodrl_bench.algorithms.auto_entropy`), ``ent_coef_course`` (the final model's, as JSON
+    text); ``wall_s``.
+    """
+    import torch as th
+    from rl_zoo3 import utils as zoo_utils
+    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    from sb3_twodrl.zoo import register_zoo
+    from twodrl_bench.algorithms.auto_entropy import AUTO_ENTROPY_ALGOS
+    from twodrl_bench.checkpoint import set_rng_state
+
+    clock = time.perf_counter()
+    experiment, protocol, arm = job.experiment, job.protocol, job.arm
+    register_zoo()
+    zoo_utils.ALGOS.update(AUTO_ENTROPY_ALGOS)  # the bench's own baselines, beside the library's algorithms
+    if arm.algo not in zoo_utils.ALGOS:
+        raise ValueError(f"arm algo must be one of rl-zoo3's {sorted(zoo_utils.ALGOS)}, got {arm.algo!r}")
+    for package in experiment.gym_packages:
+        importlib.import_module(package)
+    th.set_num_threads(1)
+    env, events = experiment.env, protocol.events
+    entry = copy.deepcopy(arm.hyperparams)
+    check_entry(arm.name, entry, protocol.as_dict())
+    if experiment.env_kwargs:
+        entry["env_kwargs"] = {**(entry.get("env_kwargs") or {}), **experiment.env_kwargs}
+    budget = int(protocol.timesteps or entry["n_timesteps"])
+    jobs.progress_path(job.out_dir, job.name).parent.mkdir(parents=True, exist_ok=True)
+    resumed = jobs.resume(job)
+    if resumed is None:
+        model, run_dir = _new_model(job, entry, Path(job.out_dir) / "zoo" / job.name)
+        state = {"run": str(run_dir), "checkpoint_at": 0, "elapsed": 0.0}
+        jobs.progress_path(job.out_dir, job.name).write_text("")
+        model.learn(budget, callback=Checkpoints(job, state, budget))
+    else:
+        model, rng, state = resumed
+        run_dir = Path(state["run"])
+        restore_monitors(model, state.pop("monitors"))
+        set_rng_state(rng)
+        remaining = budget - model.num_timesteps
+        model.learn(remaining, callback=Checkpoints(job, state, budget), reset_num_timesteps=False)
+    model.env.close()
+    model.save(run_dir / env)
+    statistics = model.get_vec_normalize_env()
+    if statistics is not None:
+        statistics.save(str(run_dir / env / "vecnormalize.pkl"))
+    train_eps = training_episodes(run_dir, int(entry.get("n_envs", 1)), events)
+    model = zoo_utils.ALGOS[arm.algo].load(run_dir / f"{env}.zip", device="cpu")
+    eval_env = make_vec_env(
+        env,
+        n_envs=1,
+        seed=EVAL_SEED + job.seed,
+        wrapper_class=zoo_utils.get_wrapper_class(entry),
+        env_kwargs=entry.get("env_kwargs"),
+    )
+    stats = run_dir / env / "vecnormalize.pkl"
+    if stats.exists():
+        eval_env = VecNormalize.load(str(stats), eval_env)
+        eval_env.training, eval_env.norm_reward = False, False
+    final = evaluate(model, eval_env, protocol.eval_episodes, events)
+    eval_env.close()
+    found = len(train_eps) > 0
+    learned_coefficient = getattr(model, "ent_coef_auto", False)
+    course = {"ent_coef_course": json.dumps(model.ent_coef_course)} if learned_coefficient else {}
+    jobs.finish(job)
+    return [
+        {
+            "task": protocol.task or env,
+            "env": env,
+            "arm": arm.name,
+            "seed": job.seed,
+            "n_timesteps": budget,
+            **final,
+            "train_episodes": len(train_eps),
+            "train_return": float(train_eps[:, 1].mean()) if found else math.nan,
+            "train_events_per_episode": float(train_eps[:, 2].mean()) if found else math.nan,
+            "train_event_share": float(np.mean(train_eps[:, 2] > 0)) if found else math.nan,
+            "curve": json.dumps(learning_curve(train_eps, budget)),
+            **course,
+            "wall_s": round(state["elapsed"] + time.perf_counter() - clock, 1),
+        }
+    ]
+
+
 def run_job(
     arm: dict[str, Any],
     env: str,
@@ -182,87 +314,23 @@ def run_job(
     out_dir: str,
     gym_packages: list[str],
 ) -> list[Row]:
-    """Train ``arm`` on ``env`` with rl-zoo3 (seed ``seed``, its logs in ``<out_dir>/zoo/<arm>_seed<seed>``, where
-    an interrupted attempt's are removed first) and evaluate the final model; its one row.
+    """:func:`run` of a job given as plain data: ``arm`` as ``{name, algo, hyperparams}`` (``hyperparams``
+    :func:`resolve_arm`'s entry), the spec's ``env``, ``env_kwargs``, ``protocol`` and ``gym_packages``.
 
-    The row: ``task``, ``env``, ``arm``, ``seed``, ``n_timesteps``; the final evaluation's ``final_return`` (mean),
-    ``final_return_std``, ``final_length``, ``final_events`` (per episode), ``final_event_share``; over the
-    training episodes ``train_episodes``, ``train_return``, ``train_events_per_episode``, ``train_event_share``;
-    ``curve`` (:func:`learning_curve` as JSON text, so that the row is flat); for an arm whose entropy coefficient
-    is learned (:mod:`twodrl_bench.auto_entropy`), ``ent_coef_course`` (the final model's, as JSON text); ``wall_s``.
+    :raises ValueError: naming the argument, for a bad arm, protocol or seed
     """
-    import torch as th
-    import yaml
-    from rl_zoo3 import utils as zoo_utils
-    from rl_zoo3.train import train
-    from stable_baselines3.common.env_util import make_vec_env
-    from stable_baselines3.common.vec_env import VecNormalize
-
-    from sb3_twodrl.zoo import prepare_zoo_argv, register_zoo, run_zoo_entry
-    from twodrl_bench.auto_entropy import AUTO_ENTROPY_ALGOS
-
-    clock = time.perf_counter()
-    check_protocol(protocol)
+    timesteps = check_protocol(protocol)
     if not isinstance(arm.get("name"), str) or not arm["name"] or not isinstance(arm.get("hyperparams"), dict):
         raise ValueError(f"arm must be {{name, algo, hyperparams}} (resolve_arm's entry), got {arm!r}")
-    register_zoo()
-    zoo_utils.ALGOS.update(AUTO_ENTROPY_ALGOS)  # the bench's own baselines, beside the library's algorithms
-    if arm.get("algo") not in zoo_utils.ALGOS:
-        raise ValueError(f"arm algo must be one of rl-zoo3's {sorted(zoo_utils.ALGOS)}, got {arm.get('algo')!r}")
-    if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
-        raise ValueError(f"seed must be an int >= 0, got {seed!r}")
-    for package in gym_packages:
-        importlib.import_module(package)
-    th.set_num_threads(1)
-    algo, name, events = arm["algo"], arm["name"], protocol.get("events")
-    entry = copy.deepcopy(arm["hyperparams"])
-    check_entry(name, entry, protocol)
-    if env_kwargs:
-        entry["env_kwargs"] = {**(entry.get("env_kwargs") or {}), **env_kwargs}
-    log = Path(out_dir) / "zoo" / f"{name}_seed{seed}"
-    shutil.rmtree(log, ignore_errors=True)  # what an interrupted attempt left
-    log.mkdir(parents=True)
-    conf = log / f"{algo}.yml"
-    conf.write_text(yaml.safe_dump({env: entry}))
-    argv = ["--algo", algo, "--env", env, "--seed", str(seed), "-f", str(log), "--eval-freq", "-1"]
-    argv += ["--vec-env", "dummy", "--log-interval", "-1", "--device", "cpu", "--conf-file", str(conf)]
-    if protocol.get("timesteps") is not None:
-        argv += ["--n-timesteps", str(protocol["timesteps"])]
-    run_zoo_entry("train.py", prepare_zoo_argv(argv, gym_packages=()), train)
-    (run,) = sorted((log / algo).glob(f"{env}_*"))
-    budget = int(protocol.get("timesteps") or entry["n_timesteps"])
-    train_eps = training_episodes(run, int(entry.get("n_envs", 1)), events)
-    model = zoo_utils.ALGOS[algo].load(run / f"{env}.zip", device="cpu")
-    eval_env = make_vec_env(
-        env,
-        n_envs=1,
-        seed=EVAL_SEED + seed,
-        wrapper_class=zoo_utils.get_wrapper_class(entry),
-        env_kwargs=entry.get("env_kwargs"),
+    resolved = Arm(arm["name"], arm.get("algo"), {}, "packaged", arm["hyperparams"], {})
+    experiment = Experiment(
+        name=arm["name"],
+        env=env,
+        env_kwargs=dict(env_kwargs),
+        gym_packages=tuple(gym_packages),
+        protocol=timesteps,
+        seeds=(seed,),
+        arms={arm["name"]: resolved},
+        report="benchmark",
     )
-    stats = run / env / "vecnormalize.pkl"
-    if stats.exists():
-        eval_env = VecNormalize.load(str(stats), eval_env)
-        eval_env.training, eval_env.norm_reward = False, False
-    final = evaluate(model, eval_env, protocol["eval_episodes"], events)
-    eval_env.close()
-    found = len(train_eps) > 0
-    learned_coefficient = getattr(model, "ent_coef_auto", False)
-    course = {"ent_coef_course": json.dumps(model.ent_coef_course)} if learned_coefficient else {}
-    return [
-        {
-            "task": protocol.get("task") or env,
-            "env": env,
-            "arm": name,
-            "seed": seed,
-            "n_timesteps": budget,
-            **final,
-            "train_episodes": len(train_eps),
-            "train_return": float(train_eps[:, 1].mean()) if found else math.nan,
-            "train_events_per_episode": float(train_eps[:, 2].mean()) if found else math.nan,
-            "train_event_share": float(np.mean(train_eps[:, 2] > 0)) if found else math.nan,
-            "curve": json.dumps(learning_curve(train_eps, budget)),
-            **course,
-            "wall_s": round(time.perf_counter() - clock, 1),
-        }
-    ]
+    return run(Job(experiment, arm["name"], seed, out_dir))

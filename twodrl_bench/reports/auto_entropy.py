@@ -203,7 +203,7 @@ def task_report(part: Part) -> str:
 
 def course_table(rows: Sequence[Row]) -> list[str]:
     """The automatic arms' coefficient over seeds at 10%, 50% and 100% of training (:data:`COURSE_AT`), from
-    the rows' ``ent_coef_course`` (:mod:`twodrl_bench.auto_entropy`); no lines if no row has one."""
+    the rows' ``ent_coef_course`` (:mod:`twodrl_bench.algorithms.auto_entropy`); no lines if no row has one."""
     courses: dict[str, list[list[list[float]]]] = {}
     for row in sorted(rows, key=lambda r: (r["arm"], r["seed"])):
         text = row.get("ent_coef_course")

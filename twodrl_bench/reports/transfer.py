@@ -16,7 +16,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from twodrl_bench.epochs import PAPER_TRIALS
+from twodrl_bench.experiment import PAPER_TRIALS
 from twodrl_bench.intervals import mean_ci, wilson
 from twodrl_bench.reports import Part
 

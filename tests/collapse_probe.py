@@ -4,8 +4,9 @@ driving into the wall back to the goal?
 ``tests.toy_envs.LatticeCorridor(6, 3)`` (60-step limit, 4 envs, gamma 0.9), the actor's bias set to
 ``lead`` for west (the wall at the start) before training, 20k steps; then 20 stochastic test episodes
 (goal, crash) and the greedy policy's outcome, one Markdown row per (setting, lead, ``ent_coef``, seed).
-Run from the repository root (the corridor lives in ``tests/``):
-``PYTHONPATH=. python scripts/collapse_probe.py [SETTING ...]`` (default: every setting).
+It lives beside the corridor it trains on (``tests/toy_envs.py``, which ``tests/test_interest.py`` also runs the
+probe's cases on); run from the repository root: ``python -m tests.collapse_probe [SETTING ...]`` (default: every
+setting).
 """
 
 import itertools
@@ -17,7 +18,7 @@ from gymnasium.wrappers import TimeLimit
 from stable_baselines3.common.env_util import make_vec_env
 
 from tests.toy_envs import LatticeCorridor
-from twodrl_bench.variants import VariantTwoDimA2C as TwoDimA2C  # the interest modes are variants
+from twodrl_bench.algorithms.variants import VariantTwoDimA2C as TwoDimA2C  # the interest modes are variants
 
 SETTINGS = {
     "paper (eq. 9), raw": {"interest": "paper"},

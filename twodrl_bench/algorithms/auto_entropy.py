@@ -42,19 +42,20 @@ paper's epochs, which read it per epoch).
 from __future__ import annotations
 
 import contextlib
-import inspect
 import math
 from collections.abc import Callable, Iterator
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import torch as th
 from gymnasium import spaces
+from stable_baselines3.common.policies import ActorCriticCnnPolicy, BasePolicy, MultiInputActorCriticPolicy
+from stable_baselines3.common.type_aliases import PyTorchObs
 from stable_baselines3.common.utils import update_learning_rate
 
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
 from sb3_twodrl.common.validation import check_non_negative, is_real
-from twodrl_bench.baselines import BatchedA2C, BatchedPPO
+from twodrl_bench.algorithms.baselines import BatchedA2C, BatchedPPO, FastActorCriticPolicy
 
 TARGET_FRACTION = 0.98
 """The default target, as a fraction of the maximum entropy: SAC-Discrete's ``0.98 * -log(1/|A|)``
@@ -102,8 +103,9 @@ def parse_ent_coef(ent_coef: float | str) -> tuple[bool, float]:
 class AutoEntropyMixin:
     """SAC's learned entropy coefficient on an SB3 on-policy algorithm; goes before the algorithm's class.
 
-    The entropy of each gradient step's batch reaches :meth:`_tune_ent_coef` through
-    :meth:`_observing_entropy` (stock algorithms) or the algorithm's ``_evaluate_actions`` (2D-RL).
+    The entropy of each gradient step's batch reaches :meth:`_tune_ent_coef` through the policy's
+    ``evaluate_actions`` (stock algorithms, :class:`EntropyObservingPolicyMixin`) or the algorithm's
+    ``_evaluate_actions`` (2D-RL).
     """
 
     # The algorithm's attributes that the mixin uses
@@ -116,10 +118,22 @@ class AutoEntropyMixin:
     _current_progress_remaining: float
     num_timesteps: int
 
-    def _init_auto_entropy(
-        self, ent_coef: float | str, target_entropy_fraction: float, ent_coef_lr: float | None
-    ) -> float:
-        """Validate and store the arguments; returns the initial coefficient."""
+    def __init__(
+        self,
+        policy: str | type[BasePolicy],
+        env: Any,
+        *args: Any,
+        ent_coef: float | str = "auto",
+        target_entropy_fraction: float = TARGET_FRACTION,
+        ent_coef_lr: float | None = None,
+        **kwargs: Any,
+    ):
+        """:param ent_coef: ``"auto"`` (learned, from 1), ``"auto_<x>"`` (learned, from ``x``) or a fixed coefficient
+        :param target_entropy_fraction: the target entropy as a fraction of the maximum, in (0, 1]
+        :param ent_coef_lr: the coefficient's Adam learning rate; None: the algorithm's (its schedule, as SAC)
+
+        Every other argument is the algorithm's.
+        """
         self.ent_coef_auto, self.ent_coef_init = parse_ent_coef(ent_coef)
         if not (is_real(target_entropy_fraction) and 0.0 < target_entropy_fraction <= 1.0):
             raise ValueError(f"target_entropy_fraction must be in (0, 1], got {target_entropy_fraction!r}")
@@ -133,7 +147,7 @@ class AutoEntropyMixin:
         self._ent_coef_stats: list[tuple[float, float, float]] = []
         self.ent_coef_latest: list[float] | None = None
         self.ent_coef_course: list[list[float] | None] = [None] * COURSE_POINTS
-        return self.ent_coef_init
+        super().__init__(policy, env, *args, ent_coef=self.ent_coef_init, **kwargs)  # type: ignore[call-arg]
 
     def _setup_model(self) -> None:
         if self.ent_coef_auto:
@@ -196,24 +210,60 @@ class AutoEntropyMixin:
         return [*super()._excluded_save_params(), "_ent_coef_stats"]  # type: ignore[misc]
 
 
+class EntropyObservingPolicyMixin:
+    """A policy whose ``evaluate_actions`` hands each batch's entropy to its ``entropy_observer`` (if any) before
+    returning it: how SB3's A2C and PPO, whose ``train`` asks the policy, let the algorithm see the entropy."""
+
+    entropy_observer: Callable[[th.Tensor], None] | None = None
+
+    def evaluate_actions(self, obs: PyTorchObs, actions: th.Tensor) -> tuple[th.Tensor, th.Tensor, th.Tensor | None]:
+        values, log_prob, entropy = super().evaluate_actions(obs, actions)  # type: ignore[misc]
+        if self.entropy_observer is not None:
+            self.entropy_observer(entropy)  # never None: the spaces with a maximum entropy have it in closed form
+        return values, log_prob, entropy
+
+
+class EntropyObservingActorCriticPolicy(EntropyObservingPolicyMixin, FastActorCriticPolicy):
+    """The stock arms' ``MlpPolicy`` (:class:`~twodrl_bench.algorithms.baselines.FastActorCriticPolicy`)."""
+
+
+class EntropyObservingCnnPolicy(EntropyObservingPolicyMixin, ActorCriticCnnPolicy):
+    """SB3's ``CnnPolicy``."""
+
+
+class EntropyObservingMultiInputPolicy(EntropyObservingPolicyMixin, MultiInputActorCriticPolicy):
+    """SB3's ``MultiInputPolicy``."""
+
+
+_OBSERVING_POLICIES: dict[str, type[BasePolicy]] = {
+    "MlpPolicy": EntropyObservingActorCriticPolicy,
+    "CnnPolicy": EntropyObservingCnnPolicy,
+    "MultiInputPolicy": EntropyObservingMultiInputPolicy,
+}
+
+
 class _StockAutoEntropyMixin(AutoEntropyMixin):
-    """For SB3's A2C and PPO, whose ``train`` asks ``policy.evaluate_actions`` for each batch's entropy."""
+    """For SB3's A2C and PPO, whose ``train`` asks ``policy.evaluate_actions`` for each batch's entropy: their
+    policies are :class:`EntropyObservingPolicyMixin` ones, whose observer is :meth:`_tune_ent_coef` while
+    ``train`` runs (so that no checkpoint holds it)."""
+
+    policy_aliases: ClassVar[dict[str, type[BasePolicy]]] = _OBSERVING_POLICIES
+
+    def _setup_model(self) -> None:
+        super()._setup_model()
+        if self.ent_coef_auto and not isinstance(self.policy, EntropyObservingPolicyMixin):
+            raise TypeError(
+                f"policy must be one of {sorted(_OBSERVING_POLICIES)} or an EntropyObservingPolicyMixin subclass "
+                f"with a learned ent_coef, got {type(self.policy).__name__}"
+            )
 
     @contextlib.contextmanager
     def _observing_entropy(self) -> Iterator[None]:
-        policy = self.policy
-        evaluate = policy.evaluate_actions
-
-        def evaluate_and_tune(obs: Any, actions: th.Tensor) -> tuple[th.Tensor, th.Tensor, th.Tensor | None]:
-            values, log_prob, entropy = evaluate(obs, actions)
-            self._tune_ent_coef(entropy)  # never None: the spaces with a maximum entropy have it in closed form
-            return values, log_prob, entropy
-
-        policy.evaluate_actions = evaluate_and_tune
+        self.policy.entropy_observer = self._tune_ent_coef
         try:
             yield
         finally:
-            del policy.evaluate_actions
+            self.policy.entropy_observer = None
 
 
 class _TwoDimAutoEntropyMixin(AutoEntropyMixin):
@@ -229,53 +279,16 @@ class _TwoDimAutoEntropyMixin(AutoEntropyMixin):
         return out
 
 
-def _init_with_auto_entropy(base: type) -> Callable[..., None]:
-    """``base.__init__`` with ``ent_coef`` defaulting to ``"auto"`` and the keyword arguments
-    ``target_entropy_fraction`` and ``ent_coef_lr``; its signature says so (the bench records the defaults)."""
-    signature = inspect.signature(base.__init__)
-    parameters = [
-        p.replace(default="auto", annotation="float | str") if p.name == "ent_coef" else p
-        for p in signature.parameters.values()
-    ]
-    keyword = inspect.Parameter.KEYWORD_ONLY
-    parameters += [
-        inspect.Parameter("target_entropy_fraction", keyword, default=TARGET_FRACTION, annotation="float"),
-        inspect.Parameter("ent_coef_lr", keyword, default=None, annotation="float | None"),
-    ]
-    signature = signature.replace(parameters=parameters)
-
-    def __init__(self: AutoEntropyMixin, *args: Any, **kwargs: Any) -> None:
-        arguments = signature.bind(self, *args, **kwargs)
-        arguments.apply_defaults()
-        given = dict(arguments.arguments)
-        del given["self"]
-        ent_coef = self._init_auto_entropy(
-            given.pop("ent_coef"), given.pop("target_entropy_fraction"), given.pop("ent_coef_lr")
-        )
-        base.__init__(self, ent_coef=ent_coef, **given)
-
-    __init__.__signature__ = signature  # type: ignore[attr-defined]
-    return __init__
-
-
 class AutoEntropyA2C(_StockAutoEntropyMixin, BatchedA2C):
-    """SB3's ``A2C`` (the bench's :class:`~twodrl_bench.baselines.BatchedA2C`) with SAC's learned entropy
-    coefficient (:mod:`twodrl_bench.auto_entropy`). Every other argument is ``A2C``'s.
-
-    :param ent_coef: ``"auto"`` (learned, from 1), ``"auto_<x>"`` (learned, from ``x``) or a fixed coefficient
-    :param target_entropy_fraction: the target entropy as a fraction of the maximum, in (0, 1]
-    :param ent_coef_lr: the coefficient's Adam learning rate; None: the algorithm's (its schedule, as SAC)
-    """
-
-    __init__ = _init_with_auto_entropy(BatchedA2C)
+    """SB3's ``A2C`` (the bench's :class:`~twodrl_bench.algorithms.baselines.BatchedA2C`) with SAC's learned entropy
+    coefficient: ``ent_coef``, ``target_entropy_fraction`` and ``ent_coef_lr`` as :class:`AutoEntropyMixin`'s;
+    every other argument is ``A2C``'s."""
 
 
 class AutoEntropyPPO(_StockAutoEntropyMixin, BatchedPPO):
-    """SB3's ``PPO`` (the bench's :class:`~twodrl_bench.baselines.BatchedPPO`) with SAC's learned entropy
+    """SB3's ``PPO`` (the bench's :class:`~twodrl_bench.algorithms.baselines.BatchedPPO`) with SAC's learned entropy
     coefficient, one step of it per minibatch. ``ent_coef``, ``target_entropy_fraction`` and ``ent_coef_lr``
     as :class:`AutoEntropyA2C`'s; every other argument is ``PPO``'s."""
-
-    __init__ = _init_with_auto_entropy(BatchedPPO)
 
 
 class AutoEntropyTwoDimA2C(_TwoDimAutoEntropyMixin, TwoDimA2C):
@@ -283,15 +296,11 @@ class AutoEntropyTwoDimA2C(_TwoDimAutoEntropyMixin, TwoDimA2C):
     that acts (eq. 9). ``ent_coef``, ``target_entropy_fraction`` and ``ent_coef_lr`` as
     :class:`AutoEntropyA2C`'s; every other argument is ``TwoDimA2C``'s."""
 
-    __init__ = _init_with_auto_entropy(TwoDimA2C)
-
 
 class AutoEntropyTwoDimPPO(_TwoDimAutoEntropyMixin, TwoDimPPO):
     """``TwoDimPPO`` with SAC's learned entropy coefficient, driven by the entropy of the tempered policy
     that acts (eq. 9), one step of it per minibatch. ``ent_coef``, ``target_entropy_fraction`` and
     ``ent_coef_lr`` as :class:`AutoEntropyA2C`'s; every other argument is ``TwoDimPPO``'s."""
-
-    __init__ = _init_with_auto_entropy(TwoDimPPO)
 
 
 AUTO_ENTROPY_ALGOS: dict[str, type] = {

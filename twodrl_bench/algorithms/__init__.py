@@ -1,16 +1,15 @@
-"""Algorithm names of the experiment runner: the package's table :data:`sb3_twodrl.ALGOS`, its stock arms on
-the fast path (:data:`twodrl_bench.baselines.BASELINE_ALGOS`, SB3's numbers bit for bit) and the
-ablation's variants (:data:`twodrl_bench.variants.VARIANT_ALGOS`) and the self-tuning entropy baselines
-(:data:`twodrl_bench.auto_entropy.AUTO_ENTROPY_ALGOS`)."""
+"""The bench's algorithms, plain subclasses of the library's and SB3's, and the names specs give them (:data:`ALGOS`):
+the package's table :data:`sb3_twodrl.ALGOS`, the stock arms on the fast path (:mod:`.baselines`, SB3's numbers
+bit for bit), the ablation's variants (:mod:`.variants`) and the self-tuning entropy arms (:mod:`.auto_entropy`)."""
 
 from __future__ import annotations
 
 from stable_baselines3.common.base_class import BaseAlgorithm
 
 from sb3_twodrl import ALGOS as PACKAGE_ALGOS
-from twodrl_bench.auto_entropy import AUTO_ENTROPY_ALGOS
-from twodrl_bench.baselines import BASELINE_ALGOS
-from twodrl_bench.variants import VARIANT_ALGOS
+from twodrl_bench.algorithms.auto_entropy import AUTO_ENTROPY_ALGOS
+from twodrl_bench.algorithms.baselines import BASELINE_ALGOS
+from twodrl_bench.algorithms.variants import VARIANT_ALGOS
 
 ALGOS: dict[str, type[BaseAlgorithm]] = {**PACKAGE_ALGOS, **BASELINE_ALGOS, **VARIANT_ALGOS, **AUTO_ENTROPY_ALGOS}
 """Every algorithm the experiment commands can run, by name."""
