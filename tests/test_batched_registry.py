@@ -66,6 +66,7 @@ OPTION_VALUES: dict[str, Callable[[str | None], Any]] = {
     "model": lambda _: RealisticModel(slip_sd_cm=2.0, sonar_miss_prob=0.2),
     "database": _database,
     "starts": lambda _: "uniform",
+    "progress": lambda _: 0.05,
 }
 
 

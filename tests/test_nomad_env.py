@@ -226,3 +226,33 @@ def test_the_raw_input_stage_gives_the_envs_observation():
     keys, steps = np.arange(50, dtype=np.uint64), np.ones(50, dtype=np.int64)
     got = RawObservation("generated:M:3", observe_odometry=False)(th.as_tensor(scene.ranges(poses, keys, steps)))
     np.testing.assert_array_equal(got.numpy(), scene.readings(poses, keys, steps))
+
+
+def test_the_progress_signal_rewards_moves_closer_and_punishes_moves_away():
+    """``progress=k``: a move one step closer to the goal adds ``k`` to ``r_R``, one farther adds ``k`` to ``r_P``
+    (both streams stay >= 0); a collision adds nothing; eq. 11-12 otherwise."""
+    k = 0.05
+    env = gym.make("NomadOffice-v0", map="corridor", progress=k)
+    plain = gym.make("NomadOffice-v0", map="corridor")
+    distance = env.unwrapped.robot.goal_distance
+    core = env.unwrapped.core
+    rng = np.random.default_rng(0)
+    env.reset(seed=0), plain.reset(seed=0)
+    seen = set()
+    for _ in range(400):
+        before = distance[core.lattice.index(np.array(env.unwrapped._pos))]
+        action = int(rng.integers(4))
+        _, reward, terminated, truncated, info = env.step(action)
+        _, base_reward, *_, base_info = plain.step(action)
+        gain = 0.0 if info["collision"] else before - distance[core.lattice.index(np.array(info["position_cm"]))]
+        assert reward == pytest.approx(base_reward + k * gain)
+        assert info["punishment"] == pytest.approx(base_info["punishment"] + k * max(-gain, 0.0))
+        assert info["punishment"] >= 0 and reward + info["punishment"] >= 0  # r_P >= 0, r_R >= 0
+        seen.add(gain)
+        if terminated or truncated:
+            env.reset(), plain.reset()
+    assert seen == {-1.0, 0.0, 1.0}
+    with pytest.raises(ValueError, match="progress"):
+        gym.make("NomadOfficeReal-v0", progress=k)
+    with pytest.raises(ValueError, match="progress"):
+        gym.make("NomadOffice-v0", progress=-1.0)

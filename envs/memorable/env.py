@@ -77,9 +77,10 @@ class NomadOfficeMemorableEnv(NomadOfficeEnv):
         render_mode: str | None = None,
         observation: str = "sensors",
         starts: str = "map",
+        progress: float = 0.0,
     ) -> None:
         core = office_core(map)
-        self._setup(core, ReplayRobot(core, database), observe_odometry, render_mode, observation, starts)
+        self._setup(core, ReplayRobot(core, database), observe_odometry, render_mode, observation, starts, progress)
 
 
 class BatchedNomadOfficeMemorable(BatchedNomadOffice):
@@ -96,7 +97,10 @@ class BatchedNomadOfficeMemorable(BatchedNomadOffice):
         max_episode_steps: int = MAX_EPISODE_STEPS,
         observation: str = "sensors",
         starts: str = "map",
+        progress: float = 0.0,
     ) -> None:
         core = office_core(map)
         robot = ReplayRobot(core, database)
-        self._setup(num_envs, core, robot, observe_odometry, render_mode, max_episode_steps, observation, starts)
+        self._setup(
+            num_envs, core, robot, observe_odometry, render_mode, max_episode_steps, observation, starts, progress
+        )

@@ -37,7 +37,13 @@ from twodrl_envs.nomad.core import (
     start_draws,
 )
 from twodrl_envs.nomad.geometry import MOVES_CM
-from twodrl_envs.nomad.office import check_observation, non_negative, observation_space, sensor_noise_model
+from twodrl_envs.nomad.office import (
+    check_observation,
+    check_progress,
+    non_negative,
+    observation_space,
+    sensor_noise_model,
+)
 from twodrl_envs.nomad.sensors import NoiseModel
 
 _ROUTE_NAMES = np.array(ROUTES, dtype=object)
@@ -72,11 +78,14 @@ class BatchedNomadOffice(VectorEnv):
         max_episode_steps: int = MAX_EPISODE_STEPS,
         observation: str = "sensors",
         starts: str = "map",
+        progress: float = 0.0,
     ) -> None:
         core = office_core(map)
         noise = sensor_noise_model(sensor_noise)
         robot = IdealRobot(core, noise, non_negative("step_sd_cm", step_sd_cm), non_negative("slip_sd_cm", slip_sd_cm))
-        self._setup(num_envs, core, robot, observe_odometry, render_mode, max_episode_steps, observation, starts)
+        self._setup(
+            num_envs, core, robot, observe_odometry, render_mode, max_episode_steps, observation, starts, progress
+        )
 
     def _setup(
         self,
@@ -88,6 +97,7 @@ class BatchedNomadOffice(VectorEnv):
         max_episode_steps: int,
         observation: str,
         starts: str,
+        progress: float,
     ) -> None:
         """Spaces and state of ``num_envs`` ``robot``s in ``core``'s office (every variant's constructor ends here)."""
         if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
@@ -102,6 +112,8 @@ class BatchedNomadOffice(VectorEnv):
         self.observation = check_observation(observation, robot.on_lattice, type(self).__name__)
         self.observe_odometry = observe_odometry
         self.starts = check_starts(starts)
+        self.progress = check_progress(progress, robot)
+        self._outcomes = robot.outcomes(self.progress) if robot.on_lattice else None
         self._start_cells = robot.start_cells
         self.num_envs = int(num_envs)
         self.max_episode_steps = max_episode_steps
@@ -194,7 +206,8 @@ class BatchedNomadOffice(VectorEnv):
         actions = actions.astype(np.intp)
         self._t += 1
         if self.robot.on_lattice:
-            outcomes, cells = self.robot.outcomes, self._cell
+            outcomes, cells = self._outcomes, self._cell
+            assert outcomes is not None
             collided, goal = outcomes.collided[cells, actions], outcomes.goal[cells, actions]
             code, rewards = outcomes.code[cells, actions], outcomes.reward[cells, actions]
             punishment = outcomes.punishment[cells, actions]

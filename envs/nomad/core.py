@@ -130,8 +130,16 @@ class LatticeOutcomes:
 
     Arrays ``(n_cells, 4)``: ``next_cell`` (the cell itself where the move collides: a collision leaves
     the robot where it was), ``collided``, ``goal``, ``code`` (route code of the next cell, 0 on a
-    collision), ``reward`` and ``punishment`` (:func:`evaluations`). :meth:`row` gives one cell's as
-    Python values, for a single env whose step would otherwise be numpy call overhead.
+    collision), ``reward`` and ``punishment`` (:func:`evaluations`, plus the progress signal when
+    ``progress`` > 0). :attr:`rows` gives them as Python values, for a single env whose step would otherwise be
+    numpy call overhead.
+
+    The progress signal (a distance-based training signal for large offices: Mataric 1994's progress estimator,
+    Ng, Harada & Russell 1999's shaping) adds ``progress`` to ``r_R`` for a move that brings the robot one move
+    closer to the goal (lattice distance ``distance``) and ``progress`` to ``r_P`` for one that takes it a move
+    farther: both streams stay >= 0, a reward for progress and a punishment for regress. Undiscounted, it sums to
+    ``progress`` times the distance covered, whatever the path (potential-based with potential
+    ``-progress * distance``).
     """
 
     next_cell: np.ndarray
@@ -142,13 +150,24 @@ class LatticeOutcomes:
     punishment: np.ndarray
 
     @classmethod
-    def of(cls, core: OfficeCore, moves: np.ndarray) -> LatticeOutcomes:
-        """The outcomes of ``moves`` (the lattice's, or a replay's recorded free space) on ``core``'s labels."""
+    def of(
+        cls, core: OfficeCore, moves: np.ndarray, distance: np.ndarray | None = None, progress: float = 0.0
+    ) -> LatticeOutcomes:
+        """The outcomes of ``moves`` (the lattice's, or a replay's recorded free space) on ``core``'s labels;
+        with ``progress`` > 0, the progress signal along ``distance`` (moves to the goal, ``(n_cells,)``)."""
         collided = moves < 0
         next_cell = np.where(collided, np.arange(len(moves))[:, None], moves)
         goal = core.goal[next_cell] & ~collided
         code = np.where(collided, 0, core.route_code[next_cell]).astype(np.int8)
         reward, punishment = evaluations(collided, goal)
+        if progress > 0.0:
+            if distance is None:
+                raise ValueError("the progress signal needs the lattice distance to the goal (distance)")
+            with np.errstate(invalid="ignore"):
+                gain = distance[:, None] - distance[next_cell]  # +1 closer, -1 farther, 0 on a collision
+            gain = np.where(np.isfinite(gain), gain, 0.0)
+            reward = reward + progress * gain
+            punishment = punishment + progress * np.maximum(-gain, 0.0)
         return cls(next_cell, collided, goal, code, reward, punishment)
 
     @cached_property
@@ -257,10 +276,11 @@ class Robot:
         self.core = core
         self.moves = core.lattice.moves
 
-    @cached_property
-    def outcomes(self) -> LatticeOutcomes:
-        """:class:`LatticeOutcomes` of :attr:`moves`."""
-        return LatticeOutcomes.of(self.core, self.moves)
+    def outcomes(self, progress: float = 0.0) -> LatticeOutcomes:
+        """:class:`LatticeOutcomes` of :attr:`moves`, with the progress signal of weight ``progress``."""
+        if not self.on_lattice:
+            raise ValueError(f"{type(self).__name__} moves off the lattice: it has no lattice outcomes")
+        return LatticeOutcomes.of(self.core, self.moves, self.goal_distance if progress else None, progress)
 
     @cached_property
     def goal_distance(self) -> np.ndarray:

@@ -68,6 +68,17 @@ def non_negative(name: str, value: object) -> float:
     return float(value)
 
 
+def check_progress(progress: object, robot: Robot) -> float:
+    """``progress`` (the weight of the progress signal, :class:`~twodrl_envs.nomad.core.LatticeOutcomes`) as a
+    float if it is a finite number >= 0 and, when > 0, ``robot`` moves on the lattice; else ``ValueError``."""
+    weight = non_negative("progress", progress)
+    if weight > 0.0 and not robot.on_lattice:
+        raise ValueError(
+            f"progress={progress!r} needs a robot that moves on the lattice ({type(robot).__name__} does not)"
+        )
+    return weight
+
+
 def observation_space(core: OfficeCore, observation: str, observe_odometry: bool) -> spaces.Space:
     """One robot's observation space: ``Discrete(n_cells)`` for ``"cell"``, else 32 readings (+ 2 odometry)."""
     if observation == "cell":
@@ -118,11 +129,12 @@ class NomadOfficeEnv(gym.Env):
         render_mode: str | None = None,
         observation: str = "sensors",
         starts: str = "map",
+        progress: float = 0.0,
     ) -> None:
         core = office_core(map)
         noise = sensor_noise_model(sensor_noise)
         robot = IdealRobot(core, noise, non_negative("step_sd_cm", step_sd_cm), non_negative("slip_sd_cm", slip_sd_cm))
-        self._setup(core, robot, observe_odometry, render_mode, observation, starts)
+        self._setup(core, robot, observe_odometry, render_mode, observation, starts, progress)
 
     @classmethod
     def training_settings(cls, **options: Any) -> dict[str, Any] | None:
@@ -150,6 +162,7 @@ class NomadOfficeEnv(gym.Env):
         render_mode: str | None,
         observation: str,
         starts: str,
+        progress: float,
     ) -> None:
         """Spaces and state of an env of ``robot`` in ``core``'s office (every variant's constructor ends here)."""
         if not isinstance(observe_odometry, bool):
@@ -164,7 +177,8 @@ class NomadOfficeEnv(gym.Env):
         self._start_cells = robot.start_cells.tolist() if starts == "uniform" else []
         self.observation_space = observation_space(core, observation, observe_odometry)
         self.action_space = spaces.Discrete(4)
-        self._outcomes = robot.outcomes.rows if robot.on_lattice else []
+        self.progress = check_progress(progress, robot)
+        self._outcomes = robot.outcomes(self.progress).rows if robot.on_lattice else []
         self._base_key = 0
         self._episode = -1
         self._key = 0

@@ -414,9 +414,10 @@ class NomadOfficeRealEnv(NomadOfficeEnv):
         render_mode: str | None = None,
         observation: str = "sensors",
         starts: str = "map",
+        progress: float = 0.0,
     ) -> None:
         core = office_core(map)
-        self._setup(core, RealisticRobot(core, model), observe_odometry, render_mode, observation, starts)
+        self._setup(core, RealisticRobot(core, model), observe_odometry, render_mode, observation, starts, progress)
 
 
 class BatchedNomadOfficeReal(BatchedNomadOffice):
@@ -437,7 +438,10 @@ class BatchedNomadOfficeReal(BatchedNomadOffice):
         max_episode_steps: int = MAX_EPISODE_STEPS,
         observation: str = "sensors",
         starts: str = "map",
+        progress: float = 0.0,
     ) -> None:
         core = office_core(map)
         robot = RealisticRobot(core, model)
-        self._setup(num_envs, core, robot, observe_odometry, render_mode, max_episode_steps, observation, starts)
+        self._setup(
+            num_envs, core, robot, observe_odometry, render_mode, max_episode_steps, observation, starts, progress
+        )
