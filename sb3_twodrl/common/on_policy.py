@@ -34,12 +34,6 @@ from sb3_twodrl.common.validation import (
     check_unit_interval,
 )
 
-SAVE_FORMAT = 2
-"""Layout of a saved 2D-RL algorithm: 2 since the temperature settings are the policy's constructor
-arguments and the algorithms take no ``interest``, ``preferences``, ``preference_bound`` or ``actor_update``;
-files without it are refused by ``load``."""
-
-
 class TwoDimOnPolicyMixin(BatchInfosMixin):
     """
     2D-RL on an SB3 on-policy algorithm: two critics, the utility advantage and the interest temperature.
@@ -97,7 +91,6 @@ class TwoDimOnPolicyMixin(BatchInfosMixin):
         max_temperature: float,
         interest_coef: float,
         policy_kwargs: dict[str, Any] | None,
-        _init_setup_model: bool,
     ) -> str | type[BasePolicy]:
         """Validate and store the 2D-RL arguments; returns the policy, a class made 2D (eq. 3-9) if needed."""
         check_positive_int("n_steps", n_steps)
@@ -127,8 +120,6 @@ class TwoDimOnPolicyMixin(BatchInfosMixin):
                 f"policy_kwargs must not hold {passed}: they are {type(self).__name__}'s own arguments, "
                 "which it passes to the policy"
             )
-        # Set by the constructor, or by ``load`` from the file (None if the file has none: an older layout)
-        self._two_dim_format = SAVE_FORMAT if _init_setup_model else None
         self._carried_interest: tuple[Any, np.ndarray] | None = None
         return policy if isinstance(policy, str) else two_dim_policy_class(policy)
 
@@ -143,13 +134,6 @@ class TwoDimOnPolicyMixin(BatchInfosMixin):
                 f"{type(self).__name__} cannot use the policy class {self.policy_class.__name__}, which has no "
                 "punishment critic: if you are loading a file, it holds a model saved by another algorithm "
                 "(e.g. stock A2C or PPO); load it with that algorithm's load"
-            )
-        if self._two_dim_format != SAVE_FORMAT:  # only ``load`` of a file saved by an older version gets here
-            raise ValueError(
-                f"this file was saved by an older sb3-twodrl (no save format, this version writes {SAVE_FORMAT}) and "
-                f"cannot be loaded by {type(self).__name__}: the temperature settings moved into the policy, the "
-                "punishment critic starts at 0 and the algorithms no longer take interest, preferences, "
-                "preference_bound or actor_update; retrain, or load it with the version that saved it"
             )
         if self.rollout_buffer_class is None:
             is_dict = isinstance(self.observation_space, spaces.Dict)

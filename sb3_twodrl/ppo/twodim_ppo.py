@@ -121,7 +121,6 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
             max_temperature=max_temperature,
             interest_coef=interest_coef,
             policy_kwargs=policy_kwargs,
-            _init_setup_model=_init_setup_model,
         )
         super().__init__(
             policy,
