@@ -34,6 +34,7 @@ from sb3_twodrl.common.validation import (
     check_unit_interval,
 )
 
+
 class TwoDimOnPolicyMixin(BatchInfosMixin):
     """
     2D-RL on an SB3 on-policy algorithm: two critics, the utility advantage and the interest temperature.
