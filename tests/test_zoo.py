@@ -87,7 +87,8 @@ def test_yaml_covers_the_envs_for_both_algorithms():
         conf = yaml.safe_load(hyperparams_path(algo).read_text())
         for env_id in ZOO_ENVS:
             assert env_id in conf, (algo, env_id)
-            assert "sb3_twodrl.callbacks.NavigationMetricsCallback" in conf[env_id]["callback"]
+            names = [next(iter(c)) if isinstance(c, dict) else c for c in conf[env_id]["callback"]]
+            assert "sb3_twodrl.callbacks.NavigationMetricsCallback" in names
         assert conf["NomadOffice-v0"]["gamma"] == 0.9
     for algo in ("twoda2c", "twodppo"):
         assert yaml.safe_load(hyperparams_path(algo).read_text())["NomadOffice-v0"]["punishment_gamma"] == 0.1

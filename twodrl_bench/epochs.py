@@ -38,7 +38,7 @@ from sb3_twodrl.callbacks import NavigationMetricsCallback
 from sb3_twodrl.hyperparams import evaluate
 from twodrl_bench.algos import algo_class
 from twodrl_bench.checkpoint import load_checkpoint, save_checkpoint, set_rng_state
-from twodrl_bench.protocol import LEARNING, METRICS, RunSpec, trial_seed
+from twodrl_bench.protocol import LEARNING, METRICS, ROUTES, RunSpec, trial_seed
 from twodrl_bench.trials import run_test_trials, tally, trial_outcomes
 from twodrl_bench.vec_env import make_test_env, make_train_env
 
@@ -178,7 +178,7 @@ def run_pair(spec: RunSpec) -> list[Row]:
                 shutil.rmtree(stale, ignore_errors=True)
     progress.write_text("".join(f"{row['epoch']}\n" for row in state["rows"]))
     test_env = make_test_env(spec.env_id, spec.test_episodes, spec.vec_env, spec.env_kwargs)
-    nav = NavigationMetricsCallback()
+    nav = NavigationMetricsCallback(routes=ROUTES)
     epochs = EpochCallback(spec, test_env, nav, state)
     if state["epoch"] < spec.epochs:
         model.learn(10**15, callback=[nav, epochs], tb_log_name=spec.name, log_interval=100, reset_num_timesteps=False)
