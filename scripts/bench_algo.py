@@ -7,9 +7,8 @@ process (DummyVecEnv, one torch thread). ``a2c``/``ppo`` pair the 2D-RL algorith
 a user sees); ``a2c-fast``/``ppo-fast`` with the bench's stock arms, SB3's numbers on the same fast
 path as the 2D-RL algorithms (``twodrl_bench.baselines``): the cost of the 2D parts alone;
 ``a2c-layer``/``ppo-layer`` the 2D-RL algorithm on the library's speed layer against itself with the layer
-switched off (SB3's module calls, SB3's ``CategoricalDistribution``, a per-parameter optimizer, numpy's
-statistics; the same parameters bit for bit, ``tests/test_fast.py``): the layer's gain; ``a2c-infos`` the
-same with each step's infos made a list of dicts instead of ``BatchInfos`` (a batched env's, so with ``--batched``).
+switched off (SB3's ``CategoricalDistribution``, a per-parameter optimizer, numpy's statistics; the same
+parameters bit for bit, ``tests/test_fast.py``): the layer's gain.
 ``--batched`` runs on the bench's batched envs (``twodrl_bench.vec_env.make_train_env``) instead of DummyVecEnv.
 Throughput is env steps per second of this process's CPU
 time, so other load on a shared machine does not skew it; runs alternate (A2C, TwoDimA2C, PPO,
@@ -29,10 +28,7 @@ from stable_baselines3 import A2C, PPO
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.utils import explained_variance
-from stable_baselines3.common.vec_env import VecEnv
-from stable_baselines3.common.vec_env.base_vec_env import VecEnvStepReturn
 
-import sb3_twodrl.common.fast as fast
 import sb3_twodrl.common.on_policy as on_policy
 import sb3_twodrl.common.policies as policies
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
@@ -46,15 +42,12 @@ PAIRS: dict[str, tuple[type[BaseAlgorithm], type[BaseAlgorithm]]] = {
     "ppo-fast": (BatchedPPO, TwoDimPPO),
     "a2c-layer": (TwoDimA2C, TwoDimA2C),
     "ppo-layer": (TwoDimPPO, TwoDimPPO),
-    "a2c-infos": (TwoDimA2C, TwoDimA2C),
 }
 """Each pair: (baseline, measured); in those of :data:`SWITCHED_OFF` the baseline runs without that part."""
-SWITCHED_OFF = {"a2c-layer": "speed layer", "ppo-layer": "speed layer", "a2c-infos": "BatchInfos"}
+SWITCHED_OFF = {"a2c-layer": "speed layer", "ppo-layer": "speed layer"}
 TARGET = 0.9
 
 _LAYER_OFF = [
-    (fast, "_plain_extractor", lambda policy: False),
-    (policies, "linear", lambda layer, x: layer(x)),
     (policies.TwoDimPolicyMixin, "_categorical", lambda self: False),
     (policies, "build_optimizer", lambda p, lr: p.optimizer_class(p.parameters(), lr=lr(1), **p.optimizer_kwargs)),
     (on_policy, "fast_mean", lambda x: float(np.mean(x))),
@@ -64,7 +57,7 @@ _LAYER_OFF = [
 
 @contextlib.contextmanager
 def speed_layer_off() -> Iterator[None]:
-    """The 2D-RL algorithms on SB3's module calls and distribution, a per-parameter optimizer, numpy's statistics."""
+    """The 2D-RL algorithms on SB3's distribution, a per-parameter optimizer, numpy's statistics."""
     saved = [(owner, name, getattr(owner, name)) for owner, name, _ in _LAYER_OFF]
     for owner, name, value in _LAYER_OFF:
         setattr(owner, name, value)
@@ -75,25 +68,11 @@ def speed_layer_off() -> Iterator[None]:
             setattr(owner, name, value)
 
 
-def with_dict_infos(env: VecEnv) -> VecEnv:
-    """``env`` whose steps return their infos as a list of dicts (what a ``VecEnv`` without ``BatchInfos`` builds)."""
-    step_wait = env.step_wait
-
-    def step_wait_with_dicts() -> VecEnvStepReturn:
-        observations, rewards, dones, infos = step_wait()
-        return observations, rewards, dones, [dict(info) for info in infos]
-
-    env.step_wait = step_wait_with_dicts  # type: ignore[method-assign]
-    return env
-
-
 def steps_per_second(
     algo: type[BaseAlgorithm], env_id: str, n_envs: int, steps: int, seed: int, batched: bool, off: str | None = None
 ) -> float:
     with speed_layer_off() if off == "speed layer" else contextlib.nullcontext():
         env = make_train_env(env_id, n_envs, seed) if batched else make_vec_env(env_id, n_envs=n_envs, seed=seed)
-        if off == "BatchInfos":
-            env = with_dict_infos(env)
         model = algo("MlpPolicy", env, seed=seed, device="cpu")
         start = time.process_time()
         model.learn(steps)

@@ -198,7 +198,7 @@ def run_job(
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from sb3_twodrl.zoo import prepare_zoo_argv, register_zoo, run_zoo_entry
+    from sb3_twodrl.zoo import register_zoo, run_zoo_entry
     from twodrl_bench.auto_entropy import AUTO_ENTROPY_ALGOS
 
     clock = time.perf_counter()
@@ -228,7 +228,7 @@ def run_job(
     argv += ["--vec-env", "dummy", "--log-interval", "-1", "--device", "cpu", "--conf-file", str(conf)]
     if protocol.get("timesteps") is not None:
         argv += ["--n-timesteps", str(protocol["timesteps"])]
-    run_zoo_entry("train.py", prepare_zoo_argv(argv, gym_packages=()), train)
+    run_zoo_entry("train.py", argv, train)  # the env packages: gym_packages only (no entry-point group)
     (run,) = sorted((log / algo).glob(f"{env}_*"))
     budget = int(protocol.get("timesteps") or entry["n_timesteps"])
     train_eps = training_episodes(run, int(entry.get("n_envs", 1)), events)

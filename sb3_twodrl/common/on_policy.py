@@ -19,7 +19,6 @@ from stable_baselines3.common.utils import obs_as_tensor
 from stable_baselines3.common.vec_env import VecEnv
 
 from sb3_twodrl.common.buffers import TwoDimBufferMixin, TwoDimDictRolloutBuffer, TwoDimRolloutBuffer
-from sb3_twodrl.common.infos import BatchInfosMixin
 from sb3_twodrl.common.policies import (
     TEMPERATURE_ARGUMENTS,
     TwoDimPolicyMixin,
@@ -35,7 +34,7 @@ from sb3_twodrl.common.validation import (
 )
 
 
-class TwoDimOnPolicyMixin(BatchInfosMixin):
+class TwoDimOnPolicyMixin:
     """
     2D-RL on an SB3 on-policy algorithm: two critics, the utility advantage and the interest temperature.
 

@@ -29,14 +29,10 @@ from stable_baselines3.common.type_aliases import PyTorchObs
 from torch import nn
 
 from sb3_twodrl.common.fast import (
-    actor_latent,
     build_optimizer,
     categorical_entropy,
     categorical_log_prob,
     categorical_sample,
-    critic_latent,
-    latents,
-    linear,
     normalized,
 )
 from sb3_twodrl.common.interest import relative_interest, updated_scale
@@ -153,12 +149,20 @@ class TwoDimPolicyMixin:
 
     def evaluate_state(self, obs: PyTorchObs) -> tuple[th.Tensor, th.Tensor, th.Tensor, th.Tensor | None]:
         """Actor latent, ``V_R(s)``, ``V_P(s)`` and the interest head's ``I(s)`` (None without one) in one pass."""
-        latent_pi, latent_vf = latents(self, obs)  # type: ignore[arg-type]
-        values, punishment_values = linear(self.value_net, latent_vf), linear(self.punishment_value_net, latent_vf)
+        latent_pi, latent_vf = self._latents(obs)
+        values, punishment_values = self.value_net(latent_vf), self.punishment_value_net(latent_vf)
         return latent_pi, values, punishment_values, self._predicted(latent_vf)
 
+    def _latents(self, obs: PyTorchObs) -> tuple[th.Tensor, th.Tensor]:
+        """The actor's and the critic's latent features, as ``ActorCriticPolicy.forward`` computes them."""
+        features = self.extract_features(obs)
+        if self.share_features_extractor:
+            return self.mlp_extractor(features)
+        pi_features, vf_features = features
+        return self.mlp_extractor.forward_actor(pi_features), self.mlp_extractor.forward_critic(vf_features)
+
     def _predicted(self, latent_vf: th.Tensor) -> th.Tensor | None:
-        return None if self.interest_net is None else linear(self.interest_net, latent_vf.detach())
+        return None if self.interest_net is None else self.interest_net(latent_vf.detach())
 
     def evaluate_actions_two_dim(
         self, obs: PyTorchObs, actions: th.Tensor, inverse_temperature: th.Tensor
@@ -184,8 +188,8 @@ class TwoDimPolicyMixin:
     def predict_critics(self, obs: PyTorchObs) -> tuple[th.Tensor, th.Tensor]:
         """Reward critic ``V_R(s)`` and punishment critic ``V_P(s)`` (eq. 3, 4)."""
         features = BaseModel.extract_features(self, obs, self.vf_features_extractor)  # type: ignore[arg-type]
-        latent_vf = critic_latent(self, features)  # type: ignore[arg-type]
-        return linear(self.value_net, latent_vf), linear(self.punishment_value_net, latent_vf)
+        latent_vf = self.mlp_extractor.forward_critic(features)
+        return self.value_net(latent_vf), self.punishment_value_net(latent_vf)
 
     def predict_punishment_values(self, obs: PyTorchObs) -> th.Tensor:
         """Punishment critic ``V_P(s)`` (eq. 4)."""
@@ -203,7 +207,7 @@ class TwoDimPolicyMixin:
 
     def action_preferences(self, latent_pi: th.Tensor) -> th.Tensor:
         """The preferences ``p(s, .)`` that ``T`` divides in eq. 9 (categorical actions): the action net's outputs."""
-        return linear(self.action_net, latent_pi)
+        return self.action_net(latent_pi)
 
     def tempered_distribution(
         self, latent_pi: th.Tensor, inverse_temperature: np.ndarray | th.Tensor, compensated: bool = False
@@ -220,7 +224,7 @@ class TwoDimPolicyMixin:
             logits = self._tempered_logits(latent_pi, inverse_temperature, compensated)
             return self.action_dist.proba_distribution(action_logits=logits)  # type: ignore[call-arg]
         inverse = th.as_tensor(inverse_temperature, device=latent_pi.device).reshape(-1, 1)
-        mean_actions = linear(self.action_net, latent_pi)
+        mean_actions = self.action_net(latent_pi)
         if isinstance(self.action_dist, StateDependentNoiseDistribution):
             return self.action_dist.proba_distribution(mean_actions, self.log_std, latent_pi / inverse)
         return self.action_dist.proba_distribution(mean_actions, self.log_std - th.log(inverse))
@@ -257,14 +261,14 @@ class TwoDimPolicyMixin:
 
     def _actor_latent(self, obs: PyTorchObs) -> th.Tensor:
         features = BaseModel.extract_features(self, obs, self.pi_features_extractor)  # type: ignore[arg-type]
-        return actor_latent(self, features)  # type: ignore[arg-type]
+        return self.mlp_extractor.forward_actor(features)
 
     def _running_inverse_temperature(self, obs: PyTorchObs, latent_pi: th.Tensor) -> np.ndarray:
         if self.interest_net is None:
             interest = np.full(len(latent_pi), self.running_interest.item(), dtype=np.float32)
         else:
             features = BaseModel.extract_features(self, obs, self.vf_features_extractor)  # type: ignore[arg-type]
-            predicted = linear(self.interest_net, critic_latent(self, features))  # type: ignore[arg-type]
+            predicted = self.interest_net(self.mlp_extractor.forward_critic(features))
             interest = predicted.detach().cpu().numpy().ravel()
         return self.inverse_temperature(interest)
 
