@@ -130,7 +130,7 @@ class EpisodeTracker:
             if "collision" in info:
                 collided[i] = bool(collided[i]) or bool(info["collision"])
         finished: list[EpisodeRecord] = []
-        for i in np.flatnonzero(dones):
+        for i in np.flatnonzero(dones).tolist():
             info = infos[i]
             ep_return, ep_length = float(self._returns[i]), int(self._lengths[i])
             episode = info.get("episode")
@@ -147,7 +147,7 @@ class EpisodeTracker:
                     has_route_key=route_key[i],
                 )
             )
-            self.reset(int(i))
+            self.reset(i)
         return finished
 
 

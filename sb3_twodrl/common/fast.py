@@ -10,6 +10,7 @@ rollout and update of ``Discrete`` actions run on them; only public torch and SB
 """
 
 import inspect
+from collections.abc import Callable
 
 import torch as th
 from stable_baselines3.common.policies import ActorCriticPolicy
@@ -43,6 +44,7 @@ def build_optimizer(policy: ActorCriticPolicy, lr_schedule: Schedule) -> th.opti
     class takes it and ``optimizer_kwargs`` does not say otherwise: one kernel per operation for all
     the parameters instead of one per parameter, the same numbers (PyTorch's RMSprop and Adam, tested)."""
     kwargs = dict(policy.optimizer_kwargs)
-    if "foreach" in inspect.signature(policy.optimizer_class).parameters:
+    optimizer_class: Callable[..., th.optim.Optimizer] = policy.optimizer_class  # a subclass: it takes lr
+    if "foreach" in inspect.signature(optimizer_class).parameters:
         kwargs.setdefault("foreach", True)
-    return policy.optimizer_class(policy.parameters(), lr=lr_schedule(1), **kwargs)
+    return optimizer_class(policy.parameters(), lr=lr_schedule(1), **kwargs)

@@ -70,7 +70,7 @@ def split_auto(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np
     if all("punishment" in info for info in infos):
         return split_info(rewards, infos)
     reward_r, reward_p = split_sign(rewards, infos)
-    for idx in np.flatnonzero(keyed):
+    for idx in np.flatnonzero(keyed).tolist():
         split = split_info if "punishment" in infos[idx] else split_cost
         (reward_r[idx],), (reward_p[idx],) = split(rewards[idx : idx + 1], [infos[idx]])
     return reward_r, reward_p
