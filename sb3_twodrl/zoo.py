@@ -145,13 +145,10 @@ its ``pyproject.toml`` (``[project.entry-points."sb3_twodrl.gym_packages"]``, ``
 import every one, so its IDs need no ``--gym-packages``."""
 
 
-def import_gym_packages() -> list[str]:
-    """Import the module of every entry point in :data:`GYM_PACKAGES_GROUP`; returns their names."""
-    names = []
+def import_gym_packages() -> None:
+    """Import the module of every entry point in :data:`GYM_PACKAGES_GROUP` (which registers its env IDs)."""
     for entry_point in entry_points(group=GYM_PACKAGES_GROUP):
         entry_point.load()
-        names.append(entry_point.name)
-    return names
 
 
 def prepare_zoo_argv(argv: list[str], packaged_conf: bool = False) -> list[str]:
