@@ -1,8 +1,8 @@
-"""Navigation metrics for any SB3 algorithm: goal rate, reward per step, route shares, collisions.
+"""Episode metrics for any SB3 algorithm: goal rate, reward per step, route shares, collisions.
 
-The metrics are those of the 2D-RL paper's figures 3-5. They are computed from what the
-environment reports in ``info`` at the end of each episode, so the callback works with any
-algorithm (A2C, TwoDimA2C, PPO, ...) and any environment that sets the keys below.
+The metrics are those of the 2D-RL paper's figures 3-5, computed from what the environment reports in
+``info`` at the end of each episode, so the callback works with any algorithm (A2C, TwoDimA2C, PPO, ...)
+and any environment that sets the keys below.
 
 Keys read from ``info`` (all optional):
 
@@ -10,8 +10,8 @@ Keys read from ``info`` (all optional):
   end of an episode. When it is missing, the callback sums the rewards it sees itself
   (``self.locals["rewards"]``), which are the *normalised* rewards if ``VecNormalize`` is used.
 - ``"is_success"``: whether the episode reached the goal (read at the episode's last step).
-- ``"route"``: ``"shortcut"``, ``"detour"`` or ``None`` (not committed yet). The label of an
-  episode is the last non-``None`` label seen during it.
+- ``"route"``: a label of the way the episode went (any string, e.g. the office's ``"shortcut"`` and
+  ``"detour"``) or ``None`` (none yet). The label of an episode is the last non-``None`` label seen during it.
 - ``"collision"``: whether a step collided; an episode collided if any of its steps did.
 """
 
@@ -25,8 +25,6 @@ from typing import Any
 
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
-
-from sb3_twodrl.common.infos import BatchInfos
 
 __all__ = [
     "EpisodeRecord",
@@ -49,21 +47,28 @@ class EpisodeRecord:
     has_route_key: bool = False  # the env sets info["route"] at all
 
 
-def summarize_episodes(episodes: Iterable[EpisodeRecord]) -> dict[str, float]:
+def _check_routes(routes: Sequence[str]) -> tuple[str, ...]:
+    """``routes`` as a tuple; ``TypeError`` unless a sequence of strings (a string itself is not one)."""
+    if isinstance(routes, str) or not all(isinstance(route, str) for route in routes):
+        raise TypeError(f"routes must be a sequence of route labels (strings), got {routes!r}")
+    return tuple(routes)
+
+
+def summarize_episodes(episodes: Iterable[EpisodeRecord], routes: Sequence[str] = ()) -> dict[str, float]:
     """Metrics over a set of finished episodes (the definitions used everywhere in this package).
 
     - ``goal_rate``: share of episodes with ``is_success`` true, over the episodes that carry the key.
     - ``reward_per_step``: mean over episodes of (episode return / episode length) (paper, figure 4).
-    - ``shortcut_share`` / ``detour_share``: among the episodes whose route is labelled
-      (``"shortcut"`` or ``"detour"``), the share labelled shortcut / detour. The two sum to 1.
-      Episodes that ended before committing to a route (e.g. an early collision) do not count.
-      NaN when no episode is labelled.
+    - ``<label>_share``: for each label in ``routes`` and each other label an episode carries, its share
+      among the episodes whose route is labelled (the shares sum to 1). Episodes that ended before
+      taking a route (e.g. an early collision) do not count. NaN when no episode is labelled.
     - ``collision_rate``: share of episodes in which a collision happened.
     - ``episodes``: how many episodes were summarised; ``labelled_episodes``: how many carry a route.
 
-    A metric whose key the env never set is absent from the result; a metric over an empty
-    set is NaN.
+    A metric whose key the env never set is absent from the result (the route metrics: unless an episode
+    carries the ``route`` key); a metric over an empty set is NaN.
     """
+    routes = _check_routes(routes)
     eps = list(episodes)
     out: dict[str, float] = {"episodes": float(len(eps))}
     nan = math.nan
@@ -78,14 +83,10 @@ def summarize_episodes(episodes: Iterable[EpisodeRecord]) -> dict[str, float]:
     if collided or not eps:
         out["collision_rate"] = float(np.mean(collided)) if collided else nan
     if any(e.has_route_key for e in eps) or not eps:
-        labelled = [e.route for e in eps if e.route in ("shortcut", "detour")]
+        labelled = [e.route for e in eps if e.route is not None]
         out["labelled_episodes"] = float(len(labelled))
-        if labelled:
-            out["shortcut_share"] = labelled.count("shortcut") / len(labelled)
-            out["detour_share"] = labelled.count("detour") / len(labelled)
-        else:
-            out["shortcut_share"] = nan
-            out["detour_share"] = nan
+        for label in dict.fromkeys([*routes, *labelled]):
+            out[f"{label}_share"] = labelled.count(label) / len(labelled) if labelled else nan
     return out
 
 
@@ -109,25 +110,6 @@ class EpisodeTracker:
             self._collided[i] = None
             self._route_key[i] = False
 
-    def _track_columns(self, infos: Sequence[Mapping[str, Any]]) -> bool:
-        """The loop of :meth:`step` over a batched step's arrays; False where they cannot stand in for it."""
-        if not isinstance(infos, BatchInfos):
-            return False
-        present = [key for key in ("route", "collision") if key in infos.columns]
-        columns = {key: infos.column(key) for key in present}
-        if any(column is None for column in columns.values()):
-            return False
-        if (route := columns.get("route")) is not None:
-            self._route_key = [True] * self.n_envs
-            self._routes = [
-                old if new is None else str(new) for old, new in zip(self._routes, route.tolist(), strict=True)
-            ]
-        if (collision := columns.get("collision")) is not None:
-            self._collided = [
-                bool(old) or bool(new) for old, new in zip(self._collided, collision.tolist(), strict=True)
-            ]
-        return True
-
     def step(
         self,
         infos: Sequence[Mapping[str, Any]],
@@ -138,19 +120,17 @@ class EpisodeTracker:
         if rewards is not None:
             self._returns += np.asarray(rewards, dtype=np.float64).reshape(self.n_envs)
         self._lengths += 1
-        if not self._track_columns(infos):
-            routes, collided, route_key = self._routes, self._collided, self._route_key
-            for i, info in enumerate(infos):
-                if "route" in info:
-                    route_key[i] = True
-                    route = info["route"]
-                    if route is not None:
-                        routes[i] = str(route)
-                if "collision" in info:
-                    collided[i] = bool(collided[i]) or bool(info["collision"])
         routes, collided, route_key = self._routes, self._collided, self._route_key
+        for i, info in enumerate(infos):
+            if "route" in info:
+                route_key[i] = True
+                route = info["route"]
+                if route is not None:
+                    routes[i] = str(route)
+            if "collision" in info:
+                collided[i] = bool(collided[i]) or bool(info["collision"])
         finished: list[EpisodeRecord] = []
-        for i in np.flatnonzero(dones):
+        for i in np.flatnonzero(dones).tolist():
             info = infos[i]
             ep_return, ep_length = float(self._returns[i]), int(self._lengths[i])
             episode = info.get("episode")
@@ -167,31 +147,36 @@ class EpisodeTracker:
                     has_route_key=route_key[i],
                 )
             )
-            self.reset(int(i))
+            self.reset(i)
         return finished
 
 
 class NavigationMetricsCallback(BaseCallback):
     """Logs the paper's navigation metrics to SB3's logger (so to TensorBoard) at every rollout end.
 
-    Keys: ``rollout/goal_rate``, ``rollout/reward_per_step``, ``rollout/shortcut_share``,
-    ``rollout/detour_share``, ``rollout/collision_rate`` (definitions: :func:`summarize_episodes`),
-    computed over the last ``window`` finished episodes (like SB3's ``rollout/ep_rew_mean``, which
-    uses the last 100). Nothing is logged before the first episode ends. Route shares are logged
-    only for envs that set ``info["route"]`` (NaN while no episode in the window is labelled),
-    the goal rate only for envs that set ``info["is_success"]``, the collision rate only for envs
-    that set ``info["collision"]``.
+    Keys: ``rollout/goal_rate``, ``rollout/reward_per_step``, ``rollout/<label>_share`` for each route
+    label, ``rollout/collision_rate`` (definitions: :func:`summarize_episodes`), computed over the last
+    ``window`` finished episodes (like SB3's ``rollout/ep_rew_mean``, which uses the last 100). Nothing
+    is logged before the first episode ends. Route shares are logged only for envs that set
+    ``info["route"]``: one per label in ``routes`` (NaN while no episode in the window is labelled) and
+    one per other label, from the first episode that carries it on; the goal rate only for envs that set
+    ``info["is_success"]``, the collision rate only for envs that set ``info["collision"]``.
 
     It reads ``infos``, ``dones`` (and ``rewards`` only when ``info["episode"]`` is absent) from
     ``self.locals``, so it works with any SB3 algorithm.
+
+    :param routes: route labels whose share is logged from the start (e.g. ``["shortcut", "detour"]``)
     """
 
-    def __init__(self, window: int = 100, prefix: str = "rollout", verbose: int = 0) -> None:
+    def __init__(
+        self, window: int = 100, prefix: str = "rollout", routes: Sequence[str] = (), verbose: int = 0
+    ) -> None:
         super().__init__(verbose)
         if window < 1:
             raise ValueError(f"window must be >= 1, got {window}")
         self.window = window
         self.prefix = prefix
+        self.routes = _check_routes(routes)
         self.episodes: deque[EpisodeRecord] = deque(maxlen=window)
         self.total_episodes = 0
         self._tracker: EpisodeTracker | None = None
@@ -204,11 +189,13 @@ class NavigationMetricsCallback(BaseCallback):
         finished = self._tracker.step(self.locals["infos"], self.locals["dones"], self.locals.get("rewards"))
         self.episodes.extend(finished)
         self.total_episodes += len(finished)
+        new_routes = [e.route for e in finished if e.route is not None and e.route not in self.routes]
+        self.routes += tuple(dict.fromkeys(new_routes))
         return True
 
     def metrics(self) -> dict[str, float]:
-        """The current metrics over the window (see :func:`summarize_episodes`)."""
-        return summarize_episodes(self.episodes)
+        """The current metrics over the window (see :func:`summarize_episodes`), a share for every route seen."""
+        return summarize_episodes(self.episodes, self.routes)
 
     def _on_rollout_end(self) -> None:
         if not self.episodes:

@@ -1,7 +1,8 @@
 """The installed zoo commands: ``sb3-twodrl-train`` and ``sb3-twodrl-enjoy`` (rl-zoo3's ``train`` and ``enjoy``).
 
-Both register ``twoda2c`` and ``twodppo`` (:func:`sb3_twodrl.zoo.register_zoo`) and import ``twodrl_envs`` when it is
-installed, so ``--algo twoda2c --env NomadOffice-v0`` works from any folder; every rl-zoo3 option is kept, and
+Both register ``twoda2c`` and ``twodppo`` (:func:`sb3_twodrl.zoo.register_zoo`) and import the installed env packages
+that list themselves under the ``sb3_twodrl.gym_packages`` entry points (:func:`sb3_twodrl.zoo.import_gym_packages`),
+so their env IDs work from any folder without ``--gym-packages``; every rl-zoo3 option is kept, and
 ``--num-threads`` defaults to 1 (rl-zoo3's default keeps torch's thread count: several times slower for these small
 networks on a shared machine, docs/zoo.md).
 ``sb3-twodrl-train`` reads the packaged ``<algo>.yml`` (:mod:`sb3_twodrl.hyperparams`) for a2c, ppo, twoda2c and

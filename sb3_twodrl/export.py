@@ -1,16 +1,15 @@
-"""Export a trained policy for the robot (TorchScript or ONNX): readings -> action, no SB3 needed.
+"""Export a trained policy's deterministic actor (TorchScript or ONNX): observations -> actions, no SB3 needed.
 
-The module maps a float32 batch of observations ``(n, 34)`` (16 sonar, 16 IR normalised as in
-``docs/nomad.md``, then odometry x, y in [0, 1]; ``(n, 32)`` for ``observe_odometry=False``) to
-int64 actions ``(n,)`` (0 N, 1 E, 2 S, 3 W): the argmax of the actor's preferences, which is
-what ``model.predict(obs, deterministic=True)`` returns. On the robot::
+The module maps a float32 batch of observations ``(n, *obs_shape)`` (``obs_shape`` the policy's ``Box``
+observation space's shape, stored in the file's metadata) to int64 actions ``(n,)``: the argmax of the
+actor's preferences, which is what ``model.predict(obs, deterministic=True)`` returns. Where it runs::
 
     import torch
     policy = torch.jit.load("policy.pt")
     action = int(policy(torch.as_tensor(obs, dtype=torch.float32)[None])[0])
 
 With ``--format onnx`` (extra ``onnx``: ``pip install "sb3-twodrl[onnx]"``) the same actor is an
-ONNX graph, input ``obs`` float32 ``(n, obs_dim)``, output ``action`` int64 ``(n,)``; the robot needs
+ONNX graph, input ``obs`` float32 ``(n, *obs_shape)``, output ``action`` int64 ``(n,)``; it needs
 only onnxruntime::
 
     import onnxruntime
@@ -34,6 +33,8 @@ from pathlib import Path
 import torch as th
 from gymnasium import spaces
 from stable_baselines3.common.base_class import BaseAlgorithm
+from stable_baselines3.common.policies import ActorCriticPolicy
+from stable_baselines3.common.preprocessing import is_image_space
 from torch import nn
 
 
@@ -51,32 +52,51 @@ class DeterministicActor(nn.Module):
         return th.argmax(logits, dim=-1)
 
 
-def _actor(model: BaseAlgorithm) -> DeterministicActor:
+def _checked(model: BaseAlgorithm) -> tuple[ActorCriticPolicy, tuple[int, ...], int]:
+    """``model``'s policy, the shape of one observation and the number of actions.
+
+    :raises ValueError: unless the policy is an ``ActorCriticPolicy`` with a ``Box`` observation space that
+        is not an image (whose scaling the export leaves out) and a ``Discrete`` action space
+    """
     policy = model.policy
-    if not isinstance(policy.action_space, spaces.Discrete) or not isinstance(policy.observation_space, spaces.Box):
-        raise ValueError("export_policy supports Box observations and Discrete actions only")
-    if policy.normalize_images and len(policy.observation_space.shape) == 3:
-        raise ValueError("export_policy does not export image preprocessing")
+    if not isinstance(policy, ActorCriticPolicy):
+        raise ValueError(f"model.policy must be an ActorCriticPolicy, got {type(policy).__name__}")
+    observation_space, action_space = policy.observation_space, policy.action_space
+    if not isinstance(action_space, spaces.Discrete) or not isinstance(observation_space, spaces.Box):
+        raise ValueError(
+            "export supports Box observations and Discrete actions only, "
+            f"got observation_space={observation_space!r}, action_space={action_space!r}"
+        )
+    if policy.normalize_images and is_image_space(observation_space):
+        raise ValueError(f"export does not export image preprocessing, got image observations {observation_space!r}")
+    return policy, observation_space.shape, int(action_space.n)
+
+
+def _actor(policy: ActorCriticPolicy) -> DeterministicActor:
+    """A CPU copy of ``policy``'s deterministic actor."""
     actor = DeterministicActor(policy.pi_features_extractor, policy.mlp_extractor.policy_net, policy.action_net)
     return copy.deepcopy(actor).to("cpu").eval()
 
 
-def _meta(model: BaseAlgorithm) -> dict[str, object]:
-    policy = model.policy
-    return {
-        "algorithm": type(model).__name__,
-        "observation_shape": list(policy.observation_space.shape),
-        "actions": ["north", "east", "south", "west"][: int(policy.action_space.n)],
-        "input": "float32 (n, obs_dim): 16 sonar (r-40)/560, 16 IR r/40, then odometry scaled by the map bounds",
-        "output": "int64 (n,) argmax action (= model.predict(obs, deterministic=True))",
-    }
+def _meta(model: BaseAlgorithm, shape: tuple[int, ...], n_actions: int) -> str:
+    """What the file holds beside the actor, as JSON: the algorithm, the input's and the output's layout."""
+    return json.dumps(
+        {
+            "algorithm": type(model).__name__,
+            "observation_shape": list(shape),
+            "n_actions": n_actions,
+            "input": f"float32 (n, {', '.join(map(str, shape))})",
+            "output": "int64 (n,) argmax action (= model.predict(obs, deterministic=True))",
+        }
+    )
 
 
 def export_policy(model: BaseAlgorithm, path: str | Path) -> Path:
     """Write ``model``'s deterministic actor as TorchScript (CPU); returns the path."""
-    scripted = th.jit.script(_actor(model))
+    policy, shape, n_actions = _checked(model)
+    scripted = th.jit.script(_actor(policy))
     path = Path(path)
-    th.jit.save(scripted, str(path), _extra_files={"meta.json": json.dumps(_meta(model))})
+    th.jit.save(scripted, str(path), _extra_files={"meta.json": _meta(model, shape, n_actions)})
     return path
 
 
@@ -89,13 +109,13 @@ def export_onnx(model: BaseAlgorithm, path: str | Path, opset: int = 17) -> Path
     """
     import onnx
 
-    actor = _actor(model)
+    policy, shape, n_actions = _checked(model)
     path = Path(path)
-    example = th.zeros((1, *model.policy.observation_space.shape), dtype=th.float32)
+    example = th.zeros((1, *shape), dtype=th.float32)
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", category=DeprecationWarning)
         th.onnx.export(
-            actor,
+            _actor(policy),
             (example,),
             str(path),
             dynamo=False,
@@ -105,7 +125,7 @@ def export_onnx(model: BaseAlgorithm, path: str | Path, opset: int = 17) -> Path
             opset_version=opset,
         )
     graph = onnx.load(str(path))
-    graph.metadata_props.add(key="meta.json", value=json.dumps(_meta(model)))
+    graph.metadata_props.add(key="meta.json", value=_meta(model, shape, n_actions))
     onnx.save(graph, str(path))
     return path
 

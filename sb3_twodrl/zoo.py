@@ -15,9 +15,9 @@ call :func:`register_zoo`.
 
 from __future__ import annotations
 
-import importlib
 import sys
 from collections.abc import Callable
+from importlib.metadata import entry_points
 from typing import Any
 
 from sb3_twodrl.a2c import TwoDimA2C
@@ -25,9 +25,11 @@ from sb3_twodrl.hyperparams import PACKAGED, env_settings, hyperparams_path
 from sb3_twodrl.ppo import TwoDimPPO
 
 __all__ = [
+    "GYM_PACKAGES_GROUP",
     "ZOO_ALGOS",
     "apply_env_settings",
     "convert_two_dim_params",
+    "import_gym_packages",
     "prepare_zoo_argv",
     "register_zoo",
     "run_zoo_entry",
@@ -138,22 +140,29 @@ def _option_value(argv: list[str], *names: str) -> str | None:
     return None
 
 
-def prepare_zoo_argv(
-    argv: list[str], packaged_conf: bool = False, gym_packages: tuple[str, ...] = ("twodrl_envs",)
-) -> list[str]:
+GYM_PACKAGES_GROUP = "sb3_twodrl.gym_packages"
+"""Entry-point group of the packages that register Gymnasium env IDs on import. An env package lists itself in
+its ``pyproject.toml`` (``[project.entry-points."sb3_twodrl.gym_packages"]``, ``name = "module"``); the commands
+import every one, so its IDs need no ``--gym-packages``."""
+
+
+def import_gym_packages() -> None:
+    """Import the module of every entry point in :data:`GYM_PACKAGES_GROUP` (which registers its env IDs)."""
+    for entry_point in entry_points(group=GYM_PACKAGES_GROUP):
+        entry_point.load()
+
+
+def prepare_zoo_argv(argv: list[str], packaged_conf: bool = False) -> list[str]:
     """Make rl-zoo3's command line ready for this project (used by :mod:`sb3_twodrl.cli`).
 
-    Registers ``twoda2c`` and ``twodppo`` (:func:`register_zoo`), imports ``gym_packages`` that are installed (so
-    ``--gym-packages twodrl_envs`` is optional), and, when ``packaged_conf`` and no ``-conf/--conf-file`` is given, adds
-    ``--conf-file`` with the packaged ``<algo>.yml`` (:func:`~sb3_twodrl.hyperparams.hyperparams_path`) of the
-    algos in :data:`~sb3_twodrl.hyperparams.PACKAGED`; the other algos keep rl-zoo3's own files.
+    Registers ``twoda2c`` and ``twodppo`` (:func:`register_zoo`), imports the env packages of the
+    :data:`GYM_PACKAGES_GROUP` entry points (:func:`import_gym_packages`; ``--gym-packages`` adds others), and, when
+    ``packaged_conf`` and no ``-conf/--conf-file`` is given, adds ``--conf-file`` with the packaged ``<algo>.yml``
+    (:func:`~sb3_twodrl.hyperparams.hyperparams_path`) of the algos in :data:`~sb3_twodrl.hyperparams.PACKAGED`;
+    the other algos keep rl-zoo3's own files.
     """
     register_zoo()
-    for package in gym_packages:
-        try:
-            importlib.import_module(package)
-        except ImportError:
-            pass
+    import_gym_packages()
     argv = list(argv)
     algo = _option_value(argv, "--algo") or "ppo"
     if packaged_conf and algo in PACKAGED and not _has_option(argv, "-conf", "--conf-file"):

@@ -5,9 +5,7 @@
 Each pair trains on the same env id, n_envs, seed and stock arguments (the algorithms' defaults) in this
 process (DummyVecEnv, one torch thread). ``a2c``/``ppo`` pair the 2D-RL algorithm with stock SB3 (what
 a user sees); ``a2c-fast``/``ppo-fast`` with the bench's stock arms, SB3's numbers on the same fast
-path as the 2D-RL algorithms (``twodrl_bench.algorithms.baselines``): the cost of the 2D parts alone;
-``a2c-infos`` TwoDimA2C against itself with each step's infos made a list of dicts (:class:`DictInfos`) instead of
-``BatchInfos`` (a batched env's, so with ``--batched``): the gain of ``BatchInfos``.
+path as the 2D-RL algorithms (``twodrl_bench.algorithms.baselines``): the cost of the 2D parts alone.
 ``--batched`` runs on the bench's batched envs (``twodrl_bench.vec_env.make_train_env``) instead of DummyVecEnv.
 Throughput is env steps per second of this process's CPU
 time, so other load on a shared machine does not skew it; runs alternate (A2C, TwoDimA2C, PPO,
@@ -22,8 +20,6 @@ import torch as th
 from stable_baselines3 import A2C, PPO
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.env_util import make_vec_env
-from stable_baselines3.common.vec_env import VecEnvWrapper
-from stable_baselines3.common.vec_env.base_vec_env import VecEnvObs, VecEnvStepReturn
 
 import twodrl_envs  # noqa: F401  (registers the Nomad office ids)
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
@@ -35,30 +31,15 @@ PAIRS: dict[str, tuple[type[BaseAlgorithm], type[BaseAlgorithm]]] = {
     "ppo": (PPO, TwoDimPPO),
     "a2c-fast": (BatchedA2C, TwoDimA2C),
     "ppo-fast": (BatchedPPO, TwoDimPPO),
-    "a2c-infos": (TwoDimA2C, TwoDimA2C),
 }
-"""Each pair: (baseline, measured); in those of :data:`SWITCHED_OFF` the baseline runs without that part."""
-SWITCHED_OFF = {"a2c-infos": "BatchInfos"}
+"""Each pair: (baseline, measured)."""
 TARGET = 0.9
 
 
-class DictInfos(VecEnvWrapper):
-    """A VecEnv whose steps return their infos as a list of dicts (what a ``VecEnv`` without ``BatchInfos`` builds)."""
-
-    def reset(self) -> VecEnvObs:
-        return self.venv.reset()
-
-    def step_wait(self) -> VecEnvStepReturn:
-        observations, rewards, dones, infos = self.venv.step_wait()
-        return observations, rewards, dones, [dict(info) for info in infos]
-
-
 def steps_per_second(
-    algo: type[BaseAlgorithm], env_id: str, n_envs: int, steps: int, seed: int, batched: bool, off: str | None = None
+    algo: type[BaseAlgorithm], env_id: str, n_envs: int, steps: int, seed: int, batched: bool
 ) -> float:
     env = make_train_env(env_id, n_envs, seed) if batched else make_vec_env(env_id, n_envs=n_envs, seed=seed)
-    if off == "BatchInfos":
-        env = DictInfos(env)
     model = algo("MlpPolicy", env, seed=seed, device="cpu")
     start = time.process_time()
     model.learn(steps)
@@ -77,28 +58,19 @@ def main() -> None:
     args = parser.parse_args()
     th.set_num_threads(1)
 
-    def baseline_name(pair: str) -> str:
-        name = PAIRS[pair][0].__name__
-        return f"{name} (no {SWITCHED_OFF[pair]})" if pair in SWITCHED_OFF else name
-
-    runs: dict[str, tuple[type[BaseAlgorithm], str | None]] = {}  # name -> (algo, the part switched off)
-    for pair in args.pairs:
-        runs[baseline_name(pair)] = (PAIRS[pair][0], SWITCHED_OFF.get(pair))
-        runs[PAIRS[pair][1].__name__] = (PAIRS[pair][1], None)
+    runs = {algo.__name__: algo for pair in args.pairs for algo in PAIRS[pair]}
     rates: dict[str, list[float]] = {name: [] for name in runs}
     for _ in range(args.repeats):
-        for name, (algo, off) in runs.items():
-            rate = steps_per_second(algo, args.env, args.n_envs, args.steps, args.seed, args.batched, off)
-            rates[name].append(rate)
+        for name, algo in runs.items():
+            rates[name].append(steps_per_second(algo, args.env, args.n_envs, args.steps, args.seed, args.batched))
     medians = {name: statistics.median(values) for name, values in rates.items()}
     print(f"env={args.env} n_envs={args.n_envs} steps={args.steps} seed={args.seed} repeats={args.repeats}")
     for name, values in rates.items():
         listed = ", ".join(f"{rate:.0f}" for rate in values)
         print(f"{name:26s} {medians[name]:10.0f} env steps per CPU second  (runs: {listed})")
     for pair in args.pairs:
-        baseline, measured = baseline_name(pair), PAIRS[pair][1].__name__
-        target = "" if pair in SWITCHED_OFF else f"  (target >= {TARGET})"
-        print(f"ratio {measured} / {baseline} = {medians[measured] / medians[baseline]:.3f}{target}")
+        baseline, measured = (algo.__name__ for algo in PAIRS[pair])
+        print(f"ratio {measured} / {baseline} = {medians[measured] / medians[baseline]:.3f}  (target >= {TARGET})")
 
 
 if __name__ == "__main__":

@@ -64,7 +64,7 @@ def test_callback_logs_exact_values_with_a2c(monitored):
     model = A2C("MlpPolicy", env, n_steps=5, seed=0, device="cpu")
     capture = Capture()
     model.set_logger(Logger(folder=None, output_formats=[capture]))
-    callback = NavigationMetricsCallback(window=100)
+    callback = NavigationMetricsCallback(window=100, routes=["shortcut", "detour"])
     model.learn(total_timesteps=40, callback=callback, log_interval=1)
     assert callback.total_episodes == 10
     # Episodes that end within the first 5, 10, 15, 20 steps of each env: cumulative prefixes of SCRIPT.
@@ -98,9 +98,9 @@ def test_window_keeps_last_episodes():
 def test_no_route_key_means_no_share_and_empty_is_nan():
     assert "shortcut_share" not in summarize_episodes([EpisodeRecord(1.0, 2)])
     assert "goal_rate" not in summarize_episodes([EpisodeRecord(1.0, 2)])
-    empty = summarize_episodes([])
+    empty = summarize_episodes([], ["shortcut"])
     assert math.isnan(empty["goal_rate"]) and math.isnan(empty["shortcut_share"])
-    unlabelled = summarize_episodes([EpisodeRecord(1.0, 2, route=None, has_route_key=True)])
+    unlabelled = summarize_episodes([EpisodeRecord(1.0, 2, route=None, has_route_key=True)], ["shortcut"])
     assert math.isnan(unlabelled["shortcut_share"]) and unlabelled["labelled_episodes"] == 0
 
 
@@ -118,3 +118,31 @@ def test_stop_after_episodes_counts_all_envs():
     # Both envs finish their 3-step episode at step 3 (2 episodes), then both finish at step 8: 4 >= 3.
     assert stop.n_episodes == 4
     assert model.num_timesteps == 16
+
+
+def test_route_shares_are_those_of_the_labels_the_env_sets():
+    episodes = [EpisodeRecord(1.0, 2, route=label, has_route_key=True) for label in ["left", "up", "left", None]]
+    m = summarize_episodes(episodes)
+    assert (m["left_share"], m["up_share"], m["labelled_episodes"]) == (pytest.approx(2 / 3), pytest.approx(1 / 3), 3)
+    assert "shortcut_share" not in m
+    declared = summarize_episodes(episodes, routes=["right"])
+    assert declared["right_share"] == 0.0 and declared["left_share"] == pytest.approx(2 / 3)
+    assert math.isnan(summarize_episodes([EpisodeRecord(1.0, 2, has_route_key=True)], ["right"])["right_share"])
+
+
+@pytest.mark.parametrize("routes", ["shortcut", [1, 2]])
+def test_routes_must_be_labels(routes):
+    with pytest.raises(TypeError, match="routes must be a sequence of route labels"):
+        NavigationMetricsCallback(routes=routes)
+
+
+def test_callback_logs_a_declared_route_from_the_start_and_another_once_taken():
+    model = A2C("MlpPolicy", DummyVecEnv([ToyNavEnv]), n_steps=3, seed=0, device="cpu")
+    capture = Capture()
+    model.set_logger(Logger(folder=None, output_formats=[capture]))
+    model.learn(total_timesteps=9, callback=NavigationMetricsCallback(routes=["shortcut"]), log_interval=1)
+    # the script's first episode (3 steps) takes the shortcut, the second (5 steps) the detour
+    first, second, third = capture.dumps
+    assert first["rollout/shortcut_share"] == second["rollout/shortcut_share"] == 1.0
+    assert "rollout/detour_share" not in first and "rollout/detour_share" not in second
+    assert third["rollout/shortcut_share"] == third["rollout/detour_share"] == 0.5

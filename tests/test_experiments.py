@@ -135,6 +135,10 @@ def test_adapter_splits_masked_infos_and_marks_episode_ends():
     assert obs.shape == (3, *venv.single_observation_space.shape)
     infos = adapter._split_infos({"a": np.array([1.0, 2.0, 3.0]), "_a": np.array([True, False, True])})
     assert infos == [{"a": 1.0}, {}, {"a": 3.0}]
+    step = {"a": np.array([1, 2, 3]), "_a": np.array([False, True, False]), "xy": np.arange(6).reshape(3, 2)}
+    step |= {"route": np.array(["u", None, "w"], dtype=object), "_route": np.ones(3, dtype=bool)}
+    expected = [{"xy": [0, 1], "route": "u"}, {"xy": [2, 3], "route": None, "a": 2}, {"xy": [4, 5], "route": "w"}]
+    assert adapter._split_infos(step) == expected and type(expected[1]["a"]) is int
     for _ in range(300):
         obs, _, dones, infos = adapter.step(np.zeros(3, dtype=np.int64))  # north until a wall
         if dones.any():

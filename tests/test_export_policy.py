@@ -105,3 +105,42 @@ def test_onnx_cli_runs_without_torch_or_sb3(tmp_path):
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() in {"0", "1", "2", "3"}
+
+
+class GridObservationEnv(gym.Env):
+    """Observations of shape (3, 5), not the office's (34,); three actions."""
+
+    observation_space = gym.spaces.Box(-1.0, 1.0, (3, 5), np.float32)
+    action_space = gym.spaces.Discrete(3)
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        return self.observation_space.sample(), {}
+
+    def step(self, action):
+        return self.observation_space.sample(), float(action == 1), False, False, {}
+
+
+@pytest.mark.parametrize("fmt", ["torchscript", "onnx"])
+def test_any_box_observation_shape_exports(tmp_path, fmt):
+    model = TwoDimA2C("MlpPolicy", GridObservationEnv(), n_steps=8, seed=0, device="cpu").learn(64)
+    batch = np.random.default_rng(0).uniform(-1, 1, (50, 3, 5)).astype(np.float32)
+    expected, _ = model.predict(batch, deterministic=True)
+    if fmt == "onnx":
+        ort = pytest.importorskip("onnxruntime")
+        pytest.importorskip("onnx")
+        session = ort.InferenceSession(str(export_onnx(model, tmp_path / "p.onnx")))
+        meta = json.loads(session.get_modelmeta().custom_metadata_map["meta.json"])
+        got = session.run(["action"], {"obs": batch})[0]
+    else:
+        extra = {"meta.json": ""}
+        got = th.jit.load(str(export_policy(model, tmp_path / "p.pt")), _extra_files=extra)(th.as_tensor(batch))
+        got, meta = got.numpy(), json.loads(extra["meta.json"])
+    assert np.array_equal(got, expected) and len(set(expected.tolist())) > 1
+    assert meta["observation_shape"] == [3, 5] and meta["n_actions"] == 3
+
+
+def test_continuous_actions_are_refused(tmp_path):
+    model = TwoDimA2C("MlpPolicy", "Pendulum-v1", seed=0, device="cpu")
+    with pytest.raises(ValueError, match=r"Box observations and Discrete actions only.*action_space=Box"):
+        export_policy(model, tmp_path / "p.pt")

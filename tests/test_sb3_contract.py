@@ -2,9 +2,6 @@
 ``tests/test_identity.py::test_discrete``), with the 2D-RL algorithms standing in."""
 
 import inspect
-import io
-import json
-import zipfile
 from copy import deepcopy
 from pathlib import Path
 
@@ -133,30 +130,6 @@ def test_an_env_without_punishments_leaves_the_punishment_critic_at_zero() -> No
     assert not buffer.punishment_values.any() and not buffer.punishment_returns.any()
     head = model.policy.punishment_value_net
     assert not head.weight.any() and not head.bias.any()
-
-
-def strip_format(path: Path) -> None:
-    """Rewrite a saved model as an older version wrote it: no save format in its data."""
-    with zipfile.ZipFile(path) as archive:
-        files = {name: archive.read(name) for name in archive.namelist()}
-    data = json.loads(files["data"])
-    del data["_two_dim_format"]
-    files["data"] = json.dumps(data).encode()
-    buffer = io.BytesIO()
-    with zipfile.ZipFile(buffer, "w") as archive:
-        for name, content in files.items():
-            archive.writestr(name, content)
-    path.write_bytes(buffer.getvalue())
-
-
-@pytest.mark.parametrize("model_class", ALGOS)
-def test_loading_a_file_of_the_old_layout_says_so(tmp_path: Path, model_class: type) -> None:
-    kwargs = dict(n_steps=16, batch_size=16) if issubclass(model_class, TwoDimPPO) else {}
-    model_class("MlpPolicy", "CartPole-v1", seed=0, **kwargs).save(tmp_path / "m.zip")
-    model_class.load(tmp_path / "m.zip")  # the current layout loads
-    strip_format(tmp_path / "m.zip")
-    with pytest.raises(ValueError, match=r"saved by an older sb3-twodrl.*retrain, or load it with the version"):
-        model_class.load(tmp_path / "m.zip")
 
 
 def test_temperature_settings_are_not_policy_kwargs() -> None:

@@ -11,7 +11,7 @@ from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
 from sb3_twodrl.common.policies import TEMPERATURE_ARGUMENTS
-from tests.test_sb3_contract import policy_save_load, strip_format
+from tests.test_sb3_contract import policy_save_load
 from tests.toy_envs import LatticeCorridor
 from twodrl_bench.algorithms import algo_class
 from twodrl_bench.algorithms.variants import (
@@ -93,14 +93,6 @@ def test_the_tabular_oracle_setting() -> None:
 )
 def test_save_load_policy_of_the_variants(tmp_path: Path, model_class: type, kwargs: dict) -> None:
     policy_save_load(tmp_path, model_class, "MlpPolicy", True, (*TEMPERATURE_ARGUMENTS, *VARIANT_ARGUMENTS), **kwargs)
-
-
-def test_loading_a_variants_file_of_the_old_layout_says_so(tmp_path: Path) -> None:
-    VariantTwoDimA2C("MlpPolicy", "CartPole-v1", seed=0).save(tmp_path / "m.zip")
-    VariantTwoDimA2C.load(tmp_path / "m.zip")  # the current layout loads
-    strip_format(tmp_path / "m.zip")
-    with pytest.raises(ValueError, match="saved by an older sb3-twodrl"):
-        VariantTwoDimA2C.load(tmp_path / "m.zip")
 
 
 @pytest.mark.parametrize(("variant", "core"), [(VariantTwoDimA2C, TwoDimA2C), (VariantTwoDimPPO, TwoDimPPO)])

@@ -7,6 +7,7 @@ import os
 import runpy
 import subprocess
 import sys
+from importlib.metadata import EntryPoint
 from pathlib import Path
 
 import optuna
@@ -15,12 +16,14 @@ import yaml
 
 import tests.toy_nav  # noqa: F401  (registers ToyNav-v0)
 import twodrl_envs  # noqa: F401  (registers the Nomad office ids)
-from sb3_twodrl import cli, export
+from sb3_twodrl import cli, export, zoo
 from sb3_twodrl.hyperparams import hyperparams_path
 from sb3_twodrl.zoo import (
+    GYM_PACKAGES_GROUP,
     ZOO_ALGOS,
     ZOO_SAMPLERS,
     convert_two_dim_params,
+    prepare_zoo_argv,
     register_zoo,
     sample_twoda2c_params,
     sample_twodppo_params,
@@ -66,12 +69,28 @@ def scalar_tags(tb_dir: Path) -> set[str]:
     return tags
 
 
+def test_the_commands_import_every_env_package_of_the_entry_point_group(tmp_path, monkeypatch):
+    (tmp_path / "some_env_package.py").write_text("import gymnasium\ngymnasium.register('SomeEnv-v0', 'x:Y')\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    points = [EntryPoint("some_env_package", "some_env_package", GYM_PACKAGES_GROUP)]
+    monkeypatch.setattr(zoo, "entry_points", lambda group: points if group == GYM_PACKAGES_GROUP else [])
+    import gymnasium
+
+    try:
+        assert prepare_zoo_argv(["--algo", "a2c"]) == ["--algo", "a2c"]
+        assert "SomeEnv-v0" in gymnasium.registry
+    finally:
+        gymnasium.registry.pop("SomeEnv-v0", None)
+        sys.modules.pop("some_env_package", None)
+
+
 def test_yaml_covers_the_envs_for_both_algorithms():
     for algo in ALGOS:
         conf = yaml.safe_load(hyperparams_path(algo).read_text())
         for env_id in ZOO_ENVS:
             assert env_id in conf, (algo, env_id)
-            assert "sb3_twodrl.callbacks.NavigationMetricsCallback" in conf[env_id]["callback"]
+            names = [next(iter(c)) if isinstance(c, dict) else c for c in conf[env_id]["callback"]]
+            assert "sb3_twodrl.callbacks.NavigationMetricsCallback" in names
         assert conf["NomadOffice-v0"]["gamma"] == 0.9
     for algo in ("twoda2c", "twodppo"):
         assert yaml.safe_load(hyperparams_path(algo).read_text())["NomadOffice-v0"]["punishment_gamma"] == 0.1

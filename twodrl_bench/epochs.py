@@ -41,7 +41,7 @@ from twodrl_bench import jobs
 from twodrl_bench.algorithms import algo_class
 from twodrl_bench.checkpoint import set_rng_state
 from twodrl_bench.experiment import PAPER_TRIALS, TRANSFER_SEED, Job
-from twodrl_bench.protocol import LEARNING, METRICS, trial_seed
+from twodrl_bench.protocol import LEARNING, METRICS, ROUTES, trial_seed
 from twodrl_bench.trials import run_test_trials, tally, trial_outcomes
 from twodrl_bench.vec_env import make_test_env, make_train_env
 
@@ -165,7 +165,7 @@ def train(job: Job) -> list[Row]:
                 shutil.rmtree(stale, ignore_errors=True)
     progress.write_text("".join(f"{row['epoch']}\n" for row in state["rows"]))
     test_env = make_test_env(experiment.env, protocol.test_episodes, protocol.vec_env, experiment.env_kwargs)
-    nav = NavigationMetricsCallback()
+    nav = NavigationMetricsCallback(routes=ROUTES)
     epochs = EpochCallback(job, test_env, nav, state)
     if state["epoch"] < protocol.epochs:
         model.learn(10**15, callback=[nav, epochs], tb_log_name=job.name, log_interval=100, reset_num_timesteps=False)

@@ -8,7 +8,9 @@ from __future__ import annotations
 
 from typing import Any
 
-METRICS = ("goal_rate", "reward_per_step", "shortcut_share", "detour_share", "collision_rate")
+ROUTES = ("shortcut", "detour")
+"""The office's route labels (``info["route"]``), whose shares are columns even when no test trial took one."""
+METRICS = ("goal_rate", "reward_per_step", *(f"{route}_share" for route in ROUTES), "collision_rate")
 LEARNING = ("interest_share", "mean_temperature")
 """Per epoch, over the learning steps of the rollouts that ended in it: the share of actions whose
 temperature the interest (not a clamp) set, and the mean temperature (NaN for stock SB3 algorithms)."""

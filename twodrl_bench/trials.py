@@ -11,10 +11,12 @@ from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.vec_env import VecEnv
 
 from sb3_twodrl.callbacks import EpisodeRecord, EpisodeTracker, summarize_episodes
+from twodrl_bench.protocol import ROUTES
 
 
 def run_test_trials(model: BaseAlgorithm, test_env: VecEnv, seed: int, deterministic: bool = False) -> dict[str, float]:
-    """Metrics (:func:`~sb3_twodrl.callbacks.summarize_episodes`) of one trial per sub-env of ``test_env``.
+    """Metrics (:func:`~sb3_twodrl.callbacks.summarize_episodes`, a share for each of :data:`~.protocol.ROUTES`)
+    of one trial per sub-env of ``test_env``.
 
     Sub-env ``i`` is reset with seed ``seed + i``; the policy samples with torch, numpy and Python
     generators seeded by ``seed``, and the caller's generator states are restored afterwards, so a
@@ -42,7 +44,7 @@ def run_test_trials(model: BaseAlgorithm, test_env: VecEnv, seed: int, determini
     finally:
         np.random.set_state(np_state)
         random.setstate(py_state)
-    return summarize_episodes(r for r in records if r is not None)
+    return summarize_episodes((r for r in records if r is not None), ROUTES)
 
 
 def trial_outcomes(model: BaseAlgorithm, test_env: VecEnv, seed: int, deterministic: bool = True) -> list[str]:
@@ -66,7 +68,7 @@ def trial_outcomes(model: BaseAlgorithm, test_env: VecEnv, seed: int, determinis
     outcomes = []
     for info in ends:  # every trial has ended
         if info.get("is_success"):
-            outcomes.append(info["route"] if info.get("route") in ("shortcut", "detour") else "goal")
+            outcomes.append(info["route"] if info.get("route") in ROUTES else "goal")
         else:
             outcomes.append("collision" if info.get("collision") else "timeout")
     return outcomes
@@ -75,7 +77,7 @@ def trial_outcomes(model: BaseAlgorithm, test_env: VecEnv, seed: int, determinis
 def tally(outcomes: list[str]) -> dict[str, int]:
     """Counts of successes, shortcut successes, collisions and time-outs among ``outcomes`` (transfer tables)."""
     return {
-        "success": sum(o in ("shortcut", "detour", "goal") for o in outcomes),
+        "success": sum(o in (*ROUTES, "goal") for o in outcomes),
         "shortcut": outcomes.count("shortcut"),
         "collision": outcomes.count("collision"),
         "timeout": outcomes.count("timeout"),

@@ -21,8 +21,6 @@ from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvStepReturn
 
-from sb3_twodrl.common.infos import BatchInfos
-
 VEC_ENV_MODES = ("auto", "batched", "dummy")
 _FINAL_KEYS = ("final_obs", "final_info")
 
@@ -32,8 +30,7 @@ class VectorEnvAdapter(VecEnv):
 
     Each info key ``k`` (with its mask ``_k``) becomes ``infos[i][k]`` as a Python value (by
     ``tolist``) where the mask is set; at an episode end ``infos[i]`` gets SB3's
-    ``terminal_observation`` (from ``final_obs``) and ``TimeLimit.truncated``. ``infos`` is a
-    :class:`~sb3_twodrl.common.infos.BatchInfos`: the dicts are built when read, the arrays kept.
+    ``terminal_observation`` (from ``final_obs``) and ``TimeLimit.truncated``.
     """
 
     def __init__(self, venv: gym.vector.VectorEnv) -> None:
@@ -62,10 +59,17 @@ class VectorEnvAdapter(VecEnv):
             infos[i]["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
         return obs, rewards.astype(np.float32), dones, infos
 
-    def _split_infos(self, info: dict[str, Any]) -> BatchInfos:
-        columns = {key: values for key, values in info.items() if not key.startswith("_") and key not in _FINAL_KEYS}
+    def _split_infos(self, info: dict[str, Any]) -> list[dict[str, Any]]:
+        """The per-env dicts of a step's info arrays: one ``tolist`` per key, not one per env and key."""
+        columns = {k: values.tolist() for k, values in info.items() if not k.startswith("_") and k not in _FINAL_KEYS}
         masks = {key: info[f"_{key}"] for key in columns if f"_{key}" in info}
-        return BatchInfos(self.num_envs, columns, masks)
+        everywhere = [key for key in columns if key not in masks or masks[key].all()]
+        rows = zip(*(columns[key] for key in everywhere), strict=True) if everywhere else [()] * self.num_envs
+        infos = [dict(zip(everywhere, values, strict=True)) for values in rows]
+        for key in [key for key in columns if key not in everywhere]:
+            for i in np.flatnonzero(masks[key]):
+                infos[i][key] = columns[key][i]
+        return infos
 
     def close(self) -> None:
         self.venv.close()

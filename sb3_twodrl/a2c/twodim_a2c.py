@@ -115,7 +115,6 @@ class TwoDimA2C(TwoDimOnPolicyMixin, A2C):
             max_temperature=max_temperature,
             interest_coef=interest_coef,
             policy_kwargs=policy_kwargs,
-            _init_setup_model=_init_setup_model,
         )
         super().__init__(
             policy,

@@ -1,7 +1,7 @@
 """Rollout buffers that keep the reward and the punishment stream apart (eq. 1-8)."""
 
 from collections.abc import Generator
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 import torch as th
@@ -55,7 +55,13 @@ def td_errors_and_gae(
     return deltas, advantages
 
 
-class TwoDimBufferMixin:
+if TYPE_CHECKING:  # what the mixin extends, for the type checker; at run time it goes before that class
+    _BufferBase = RolloutBuffer
+else:
+    _BufferBase = object
+
+
+class TwoDimBufferMixin(_BufferBase):
     """Two-stream storage and advantage computation shared by the flat and the ``Dict`` buffer.
 
     Per step it stores ``r_P``, ``V_P`` and the inverse temperature used to act. After
@@ -68,16 +74,6 @@ class TwoDimBufferMixin:
     :param punishment_gae_lambda: GAE lambda of the punishment stream
     :param punishment_weight: weight ``w`` of the punishment advantage in the utility
     """
-
-    buffer_size: int
-    n_envs: int
-    pos: int
-    generator_ready: bool
-    rewards: np.ndarray
-    values: np.ndarray
-    episode_starts: np.ndarray
-    gamma: float
-    gae_lambda: float
 
     def __init__(
         self,
@@ -96,7 +92,7 @@ class TwoDimBufferMixin:
         self._gamma_lambdas = np.array([[gamma * lam] for gamma, lam in discounts], dtype=np.float32)
 
     def reset(self) -> None:
-        super().reset()  # type: ignore[misc]
+        super().reset()
         # Both streams side by side, so that their TD errors and GAE take one pass;
         # ``rewards``/``punishments`` and ``values``/``punishment_values`` are views into them
         shape = (self.buffer_size, 2, self.n_envs)
@@ -109,7 +105,7 @@ class TwoDimBufferMixin:
         self.interests = np.zeros((self.buffer_size, self.n_envs), dtype=np.float32)
         self.utilities = np.zeros((self.buffer_size, self.n_envs), dtype=np.float32)
 
-    def add(
+    def add(  # type: ignore[override]  # SB3's add plus the 2D streams, which it must get
         self,
         *args: Any,
         punishment: np.ndarray,
@@ -121,9 +117,9 @@ class TwoDimBufferMixin:
         self.punishments[self.pos] = punishment
         self.punishment_values[self.pos] = punishment_value
         self.inverse_temperatures[self.pos] = inverse_temperature
-        super().add(*args, **kwargs)  # type: ignore[misc]
+        super().add(*args, **kwargs)
 
-    def compute_returns_and_advantage(  # type: ignore[override]
+    def compute_returns_and_advantage(  # type: ignore[override]  # plus the punishment critic's last values
         self, last_values: th.Tensor, dones: np.ndarray, last_punishment_values: th.Tensor
     ) -> None:
         """Per stream TD errors and GAE with its own gamma and lambda; the utility is the actor's advantage."""
@@ -144,17 +140,28 @@ class TwoDimBufferMixin:
         self.interests = np.abs(reward_deltas) + np.abs(punishment_deltas)
         self.utilities = reward_deltas - punishment_deltas
 
-    def get(self, batch_size: int | None = None) -> Generator[TwoDimRolloutBufferSamples, None, None]:
+    def get(  # type: ignore[override]  # SB3's samples plus the 2D fields (a NamedTuple cannot extend SB3's)
+        self, batch_size: int | None = None
+    ) -> Generator[TwoDimRolloutBufferSamples, None, None]:
         if not self.generator_ready:  # flattened like SB3's arrays, so that they stay aligned with them
             for name in ("punishment_values", "punishment_returns", "interests", "inverse_temperatures"):
-                setattr(self, name, self.swap_and_flatten(getattr(self, name)))  # type: ignore[attr-defined]
-        yield from super().get(batch_size)  # type: ignore[misc]
+                setattr(self, name, self.swap_and_flatten(getattr(self, name)))
+        for samples in super().get(batch_size):
+            assert isinstance(samples, TwoDimRolloutBufferSamples)  # made by _get_samples below
+            yield samples
 
-    def _get_samples(self, batch_inds: np.ndarray, env: VecNormalize | None = None) -> TwoDimRolloutBufferSamples:
-        samples = super()._get_samples(batch_inds, env)  # type: ignore[misc]
-        to_torch = self.to_torch  # type: ignore[attr-defined]
+    def _get_samples(  # type: ignore[override]  # as get
+        self, batch_inds: np.ndarray, env: VecNormalize | None = None
+    ) -> TwoDimRolloutBufferSamples:
+        samples = super()._get_samples(batch_inds, env)
+        to_torch = self.to_torch
         return TwoDimRolloutBufferSamples(
-            *samples,
+            observations=samples.observations,
+            actions=samples.actions,
+            old_values=samples.old_values,
+            old_log_prob=samples.old_log_prob,
+            advantages=samples.advantages,
+            returns=samples.returns,
             old_punishment_values=to_torch(self.punishment_values[batch_inds].flatten()),
             punishment_returns=to_torch(self.punishment_returns[batch_inds].flatten()),
             interests=to_torch(self.interests[batch_inds].flatten()),
@@ -166,5 +173,5 @@ class TwoDimRolloutBuffer(TwoDimBufferMixin, RolloutBuffer):
     """Two-stream rollout buffer for flat observations."""
 
 
-class TwoDimDictRolloutBuffer(TwoDimBufferMixin, DictRolloutBuffer):
+class TwoDimDictRolloutBuffer(TwoDimBufferMixin, DictRolloutBuffer):  # type: ignore[misc]  # the overrides, as above
     """Two-stream rollout buffer for ``Dict`` observations."""

@@ -6,20 +6,19 @@ policy, collects rollouts with both evaluation streams and the interest temperat
 and logs the 2D statistics. The algorithm itself keeps only its ``train``.
 """
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch as th
 from gymnasium import spaces
 from stable_baselines3.common.buffers import RolloutBuffer
 from stable_baselines3.common.callbacks import BaseCallback
-from stable_baselines3.common.logger import Logger
-from stable_baselines3.common.policies import BasePolicy
+from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
+from stable_baselines3.common.policies import ActorCriticPolicy
 from stable_baselines3.common.utils import obs_as_tensor
 from stable_baselines3.common.vec_env import VecEnv
 
 from sb3_twodrl.common.buffers import TwoDimBufferMixin, TwoDimDictRolloutBuffer, TwoDimRolloutBuffer
-from sb3_twodrl.common.infos import BatchInfosMixin
 from sb3_twodrl.common.policies import (
     TEMPERATURE_ARGUMENTS,
     TwoDimPolicyMixin,
@@ -34,13 +33,13 @@ from sb3_twodrl.common.validation import (
     check_unit_interval,
 )
 
-SAVE_FORMAT = 2
-"""Layout of a saved 2D-RL algorithm: 2 since the temperature settings are the policy's constructor
-arguments and the algorithms take no ``interest``, ``preferences``, ``preference_bound`` or ``actor_update``;
-files without it are refused by ``load``."""
+if TYPE_CHECKING:  # what the mixin extends, for the type checker; at run time it goes before that class
+    _AlgorithmBase = OnPolicyAlgorithm
+else:
+    _AlgorithmBase = object
 
 
-class TwoDimOnPolicyMixin(BatchInfosMixin):
+class TwoDimOnPolicyMixin(_AlgorithmBase):
     """
     2D-RL on an SB3 on-policy algorithm: two critics, the utility advantage and the interest temperature.
 
@@ -60,27 +59,12 @@ class TwoDimOnPolicyMixin(BatchInfosMixin):
     :func:`~sb3_twodrl.common.policies.two_dim_policy_class`; a ``TwoDimPolicyMixin`` subclass is used as it is.
     """
 
-    # SB3's OnPolicyAlgorithm attributes that the mixin uses
-    policy: Any
-    policy_class: type[BasePolicy]
-    rollout_buffer: Any
-    rollout_buffer_class: type[RolloutBuffer] | None
-    rollout_buffer_kwargs: dict[str, Any]
-    observation_space: spaces.Space
-    action_space: spaces.Space
-    device: th.device
-    n_envs: int
-    num_timesteps: int
-    gamma: float
-    use_sde: bool
-    sde_sample_freq: int
-    logger: Logger
-    _last_obs: Any
-    _last_episode_starts: np.ndarray
+    policy: TwoDimPolicyMixin
+    rollout_buffer: TwoDimBufferMixin
 
     def _init_two_dim(
         self,
-        policy: str | type[BasePolicy],
+        policy: str | type[ActorCriticPolicy],
         *,
         n_steps: int,
         gamma: float,
@@ -97,8 +81,7 @@ class TwoDimOnPolicyMixin(BatchInfosMixin):
         max_temperature: float,
         interest_coef: float,
         policy_kwargs: dict[str, Any] | None,
-        _init_setup_model: bool,
-    ) -> str | type[BasePolicy]:
+    ) -> str | type[ActorCriticPolicy]:
         """Validate and store the 2D-RL arguments; returns the policy, a class made 2D (eq. 3-9) if needed."""
         check_positive_int("n_steps", n_steps)
         for name, value in (("gamma", gamma), ("gae_lambda", gae_lambda), ("punishment_gamma", punishment_gamma)):
@@ -127,8 +110,6 @@ class TwoDimOnPolicyMixin(BatchInfosMixin):
                 f"policy_kwargs must not hold {passed}: they are {type(self).__name__}'s own arguments, "
                 "which it passes to the policy"
             )
-        # Set by the constructor, or by ``load`` from the file (None if the file has none: an older layout)
-        self._two_dim_format = SAVE_FORMAT if _init_setup_model else None
         self._carried_interest: tuple[Any, np.ndarray] | None = None
         return policy if isinstance(policy, str) else two_dim_policy_class(policy)
 
@@ -143,13 +124,6 @@ class TwoDimOnPolicyMixin(BatchInfosMixin):
                 f"{type(self).__name__} cannot use the policy class {self.policy_class.__name__}, which has no "
                 "punishment critic: if you are loading a file, it holds a model saved by another algorithm "
                 "(e.g. stock A2C or PPO); load it with that algorithm's load"
-            )
-        if self._two_dim_format != SAVE_FORMAT:  # only ``load`` of a file saved by an older version gets here
-            raise ValueError(
-                f"this file was saved by an older sb3-twodrl (no save format, this version writes {SAVE_FORMAT}) and "
-                f"cannot be loaded by {type(self).__name__}: the temperature settings moved into the policy, the "
-                "punishment critic starts at 0 and the algorithms no longer take interest, preferences, "
-                "preference_bound or actor_update; retrain, or load it with the version that saved it"
             )
         if self.rollout_buffer_class is None:
             is_dict = isinstance(self.observation_space, spaces.Dict)
@@ -166,12 +140,12 @@ class TwoDimOnPolicyMixin(BatchInfosMixin):
         policy_kwargs = self.policy_kwargs
         self.policy_kwargs = {**policy_kwargs, **self._policy_two_dim_kwargs()}
         try:
-            super()._setup_model()  # type: ignore[misc]
+            super()._setup_model()
         finally:
             self.policy_kwargs = policy_kwargs
 
     def _excluded_save_params(self) -> list[str]:
-        return [*super()._excluded_save_params(), "_carried_interest"]  # type: ignore[misc]
+        return [*super()._excluded_save_params(), "_carried_interest"]
 
     def _interest(
         self,
@@ -234,6 +208,7 @@ class TwoDimOnPolicyMixin(BatchInfosMixin):
         action (after the last step, to bootstrap the returns). gSDE's noise is resampled as SB3 does.
         """
         assert self._last_obs is not None, "No previous observation was provided"
+        assert isinstance(rollout_buffer, TwoDimBufferMixin), "a 2D-RL rollout needs a TwoDimBufferMixin buffer"
         self.policy.set_training_mode(False)
         n_steps = 0
         rollout_buffer.reset()
@@ -245,18 +220,18 @@ class TwoDimOnPolicyMixin(BatchInfosMixin):
             obs_tensor = obs_as_tensor(self._last_obs, self.device)
             latent_pi, values, punishment_values, predicted = self.policy.evaluate_state(obs_tensor)
         critics = flat(values), flat(punishment_values)
-        learned = self.policy.interest_net is not None  # the state's own interest, not the transition's into it
+        # with an interest head, the state's own interest; without, the transition's into it
         inverse_temperature = self.policy.inverse_temperature(
-            flat(predicted) if learned else self._interest_at_rollout_start()
+            flat(predicted) if predicted is not None else self._interest_at_rollout_start()
         )
 
         while n_steps < n_rollout_steps:
             if self.use_sde and self.sde_sample_freq > 0 and n_steps % self.sde_sample_freq == 0:
                 self.policy.reset_noise(env.num_envs)
             with th.no_grad():
-                actions, log_probs = self.policy.sample_tempered(latent_pi, inverse_temperature)
-                log_probs = self._rollout_log_prob(latent_pi, actions, log_probs, inverse_temperature)
-            actions = actions.cpu().numpy().reshape((-1, *self.action_space.shape))  # type: ignore[misc]
+                sampled, log_probs = self.policy.sample_tempered(latent_pi, inverse_temperature)
+                log_probs = self._rollout_log_prob(latent_pi, sampled, log_probs, inverse_temperature)
+            actions = sampled.cpu().numpy().reshape((-1, *(self.action_space.shape or ())))
 
             clipped_actions = actions
             if isinstance(self.action_space, spaces.Box):
@@ -272,19 +247,20 @@ class TwoDimOnPolicyMixin(BatchInfosMixin):
             if not callback.on_step():
                 return False
 
-            self._update_info_buffer(infos, dones)  # type: ignore[attr-defined]
+            self._update_info_buffer(infos, dones)
             n_steps += 1
 
             if isinstance(self.action_space, spaces.Discrete):
                 actions = actions.reshape(-1, 1)
 
+            assert not isinstance(new_obs, tuple), "SB3's policies take array or dict observations"
             with th.no_grad():
-                obs_tensor = obs_as_tensor(new_obs, self.device)  # type: ignore[arg-type]
+                obs_tensor = obs_as_tensor(new_obs, self.device)
                 if n_steps < n_rollout_steps:
-                    latent_pi, *next_values, predicted = self.policy.evaluate_state(obs_tensor)
+                    latent_pi, next_values, next_punishment_values, predicted = self.policy.evaluate_state(obs_tensor)
                 else:  # only the critics are needed after the last step, to bootstrap the returns
-                    next_values = self.policy.predict_critics(obs_tensor)
-            next_critics = flat(next_values[0]), flat(next_values[1])
+                    next_values, next_punishment_values = self.policy.predict_critics(obs_tensor)
+            next_critics = flat(next_values), flat(next_punishment_values)
             rewards, punishments = split_rewards(reward_split, rewards, infos, self.num_timesteps)
             interest = self._interest(rewards, punishments, critics, next_critics, dones)
             self.policy.update_interest_scale(interest, dones)
@@ -310,11 +286,13 @@ class TwoDimOnPolicyMixin(BatchInfosMixin):
             )
             self._last_obs = new_obs
             self._last_episode_starts = dones
-            (values, punishment_values), critics = next_values, next_critics
+            values, punishment_values, critics = next_values, next_punishment_values, next_critics
             if n_steps < n_rollout_steps:
-                inverse_temperature = self.policy.inverse_temperature(flat(predicted) if learned else interest)
+                inverse_temperature = self.policy.inverse_temperature(
+                    flat(predicted) if predicted is not None else interest
+                )
 
-        rollout_buffer.compute_returns_and_advantage(  # type: ignore[call-arg]
+        rollout_buffer.compute_returns_and_advantage(
             last_values=values, dones=dones, last_punishment_values=punishment_values
         )
         self._carried_interest = (new_obs, interest)

@@ -13,7 +13,7 @@ algorithms pass theirs through. :class:`TwoDimPolicyMixin` adds all this to any 
 import functools
 import math
 from functools import partial
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch as th
@@ -29,14 +29,10 @@ from stable_baselines3.common.type_aliases import PyTorchObs
 from torch import nn
 
 from sb3_twodrl.common.fast import (
-    actor_latent,
     build_optimizer,
     categorical_entropy,
     categorical_log_prob,
     categorical_sample,
-    critic_latent,
-    latents,
-    linear,
     normalized,
 )
 from sb3_twodrl.common.interest import relative_interest, updated_scale
@@ -63,7 +59,13 @@ def check_temperature(temperature: str | float, min_temperature: float, max_temp
         raise ValueError(f"min_temperature ({min_temperature}) must not exceed max_temperature ({max_temperature})")
 
 
-class TwoDimPolicyMixin:
+if TYPE_CHECKING:  # what the mixin extends, for the type checker; at run time it goes before that class
+    _PolicyBase = ActorCriticPolicy
+else:
+    _PolicyBase = object
+
+
+class TwoDimPolicyMixin(_PolicyBase):
     """
     Reward critic ``V_R`` (SB3's value head), punishment critic ``V_P`` (eq. 3-8), interest head
     ``I(s)`` and the tempered distribution of eq. 9, on top of an SB3 ``ActorCriticPolicy``.
@@ -100,16 +102,6 @@ class TwoDimPolicyMixin:
     :param max_temperature: ceiling of the interest temperature
     """
 
-    # ActorCriticPolicy's attributes that the mixin uses
-    action_dist: Distribution
-    action_net: nn.Module
-    value_net: nn.Module
-    mlp_extractor: Any
-    log_std: th.Tensor
-    ortho_init: bool
-    share_features_extractor: bool
-    pi_features_extractor: nn.Module
-    vf_features_extractor: nn.Module
     running_interest: th.Tensor
 
     def __init__(
@@ -127,7 +119,7 @@ class TwoDimPolicyMixin:
         super().__init__(*args, **kwargs)
 
     def _get_constructor_parameters(self) -> dict[str, Any]:
-        data = super()._get_constructor_parameters()  # type: ignore[misc]
+        data = super()._get_constructor_parameters()
         data.update({name: getattr(self, name) for name in TEMPERATURE_ARGUMENTS})
         return data
 
@@ -135,11 +127,11 @@ class TwoDimPolicyMixin:
         """A linear head on the critic's latent, orthogonally initialised (gain 1) as SB3's value head."""
         head = nn.Linear(self.mlp_extractor.latent_dim_vf, 1)
         if self.ortho_init:
-            head.apply(partial(self.init_weights, gain=1))  # type: ignore[attr-defined]
+            head.apply(partial(self.init_weights, gain=1))
         return head
 
     def _build(self, lr_schedule: Any) -> None:
-        super()._build(lr_schedule)  # type: ignore[misc]
+        super()._build(lr_schedule)
         with th.random.fork_rng(devices=[]):
             self.punishment_value_net = self._new_head()
         nn.init.zeros_(self.punishment_value_net.weight)  # no punishment expected before one is seen
@@ -148,17 +140,25 @@ class TwoDimPolicyMixin:
         if self.temperature == "interest":
             with th.random.fork_rng(devices=[]):
                 self.interest_net = self._new_head()
-        self.register_buffer("running_interest", th.zeros(()))  # type: ignore[attr-defined]
-        self.optimizer = build_optimizer(self, lr_schedule)  # type: ignore[arg-type]
+        self.register_buffer("running_interest", th.zeros(()))
+        self.optimizer = build_optimizer(self, lr_schedule)
 
     def evaluate_state(self, obs: PyTorchObs) -> tuple[th.Tensor, th.Tensor, th.Tensor, th.Tensor | None]:
         """Actor latent, ``V_R(s)``, ``V_P(s)`` and the interest head's ``I(s)`` (None without one) in one pass."""
-        latent_pi, latent_vf = latents(self, obs)  # type: ignore[arg-type]
-        values, punishment_values = linear(self.value_net, latent_vf), linear(self.punishment_value_net, latent_vf)
+        latent_pi, latent_vf = self._latents(obs)
+        values, punishment_values = self.value_net(latent_vf), self.punishment_value_net(latent_vf)
         return latent_pi, values, punishment_values, self._predicted(latent_vf)
 
+    def _latents(self, obs: PyTorchObs) -> tuple[th.Tensor, th.Tensor]:
+        """The actor's and the critic's latent features, as ``ActorCriticPolicy.forward`` computes them."""
+        features = self.extract_features(obs)
+        if self.share_features_extractor:
+            return self.mlp_extractor(features)
+        pi_features, vf_features = features
+        return self.mlp_extractor.forward_actor(pi_features), self.mlp_extractor.forward_critic(vf_features)
+
     def _predicted(self, latent_vf: th.Tensor) -> th.Tensor | None:
-        return None if self.interest_net is None else linear(self.interest_net, latent_vf.detach())
+        return None if self.interest_net is None else self.interest_net(latent_vf.detach())
 
     def evaluate_actions_two_dim(
         self, obs: PyTorchObs, actions: th.Tensor, inverse_temperature: th.Tensor
@@ -172,6 +172,7 @@ class TwoDimPolicyMixin:
         (``1/T = 0``) scores 0: the preferences played no part in it.
         """
         latent_pi, values, punishment_values, predicted = self.evaluate_state(obs)
+        entropy: th.Tensor | None
         if self._categorical():
             log_probs = normalized(self._tempered_logits(latent_pi, inverse_temperature, compensated=True))
             log_prob, entropy = categorical_log_prob(log_probs, actions), categorical_entropy(log_probs)
@@ -183,9 +184,9 @@ class TwoDimPolicyMixin:
 
     def predict_critics(self, obs: PyTorchObs) -> tuple[th.Tensor, th.Tensor]:
         """Reward critic ``V_R(s)`` and punishment critic ``V_P(s)`` (eq. 3, 4)."""
-        features = BaseModel.extract_features(self, obs, self.vf_features_extractor)  # type: ignore[arg-type]
-        latent_vf = critic_latent(self, features)  # type: ignore[arg-type]
-        return linear(self.value_net, latent_vf), linear(self.punishment_value_net, latent_vf)
+        features = BaseModel.extract_features(self, obs, self.vf_features_extractor)
+        latent_vf = self.mlp_extractor.forward_critic(features)
+        return self.value_net(latent_vf), self.punishment_value_net(latent_vf)
 
     def predict_punishment_values(self, obs: PyTorchObs) -> th.Tensor:
         """Punishment critic ``V_P(s)`` (eq. 4)."""
@@ -195,7 +196,7 @@ class TwoDimPolicyMixin:
         """``1 / T`` of eq. 9 for each interest value (float32): at ``temperature="interest"`` the head's
         ``I(s)`` over the running mean of ``delta+`` (:func:`~sb3_twodrl.common.interest.relative_interest`),
         clamped to ``[min_temperature, max_temperature]``; otherwise ``1 / temperature``."""
-        if self.temperature != "interest":
+        if not isinstance(self.temperature, str):  # a fixed temperature (the only string is "interest")
             return np.full(np.shape(interest), 1.0 / self.temperature, dtype=np.float32)
         interest = np.asarray(interest, dtype=np.float32)
         interest = relative_interest(np.maximum(interest, 0.0), self.running_interest.item())
@@ -203,7 +204,7 @@ class TwoDimPolicyMixin:
 
     def action_preferences(self, latent_pi: th.Tensor) -> th.Tensor:
         """The preferences ``p(s, .)`` that ``T`` divides in eq. 9 (categorical actions): the action net's outputs."""
-        return linear(self.action_net, latent_pi)
+        return self.action_net(latent_pi)
 
     def tempered_distribution(
         self, latent_pi: th.Tensor, inverse_temperature: np.ndarray | th.Tensor, compensated: bool = False
@@ -218,9 +219,9 @@ class TwoDimPolicyMixin:
         """
         if not isinstance(self.action_dist, _GAUSSIANS):
             logits = self._tempered_logits(latent_pi, inverse_temperature, compensated)
-            return self.action_dist.proba_distribution(action_logits=logits)  # type: ignore[call-arg]
+            return self.action_dist.proba_distribution(action_logits=logits)
         inverse = th.as_tensor(inverse_temperature, device=latent_pi.device).reshape(-1, 1)
-        mean_actions = linear(self.action_net, latent_pi)
+        mean_actions = self.action_net(latent_pi)
         if isinstance(self.action_dist, StateDependentNoiseDistribution):
             return self.action_dist.proba_distribution(mean_actions, self.log_std, latent_pi / inverse)
         return self.action_dist.proba_distribution(mean_actions, self.log_std - th.log(inverse))
@@ -256,15 +257,15 @@ class TwoDimPolicyMixin:
         self.running_interest.fill_(updated_scale(self.running_interest.item(), interest, dones))
 
     def _actor_latent(self, obs: PyTorchObs) -> th.Tensor:
-        features = BaseModel.extract_features(self, obs, self.pi_features_extractor)  # type: ignore[arg-type]
-        return actor_latent(self, features)  # type: ignore[arg-type]
+        features = BaseModel.extract_features(self, obs, self.pi_features_extractor)
+        return self.mlp_extractor.forward_actor(features)
 
     def _running_inverse_temperature(self, obs: PyTorchObs, latent_pi: th.Tensor) -> np.ndarray:
         if self.interest_net is None:
             interest = np.full(len(latent_pi), self.running_interest.item(), dtype=np.float32)
         else:
-            features = BaseModel.extract_features(self, obs, self.vf_features_extractor)  # type: ignore[arg-type]
-            predicted = linear(self.interest_net, critic_latent(self, features))  # type: ignore[arg-type]
+            features = BaseModel.extract_features(self, obs, self.vf_features_extractor)
+            predicted = self.interest_net(self.mlp_extractor.forward_critic(features))
             interest = predicted.detach().cpu().numpy().ravel()
         return self.inverse_temperature(interest)
 
@@ -277,7 +278,7 @@ class TwoDimPolicyMixin:
         """Sample from the tempered distribution, or take the argmax of the raw preferences if ``deterministic``."""
         latent_pi = self._actor_latent(observation)
         if deterministic:
-            return self._get_action_dist_from_latent(latent_pi).get_actions(deterministic=True)  # type: ignore[attr-defined]
+            return self._get_action_dist_from_latent(latent_pi).get_actions(deterministic=True)
         return self.sample_tempered(latent_pi, self._running_inverse_temperature(observation, latent_pi))[0]
 
 

@@ -2,8 +2,7 @@
 
 2D-RL needs a reward evaluation ``r_R`` and a punishment evaluation ``r_P >= 0`` per step.
 Gymnasium environments hand back one scalar reward and an ``info`` dict; a *reward split*
-maps them to ``(r_R, r_P)``. The named modes work on a whole vectorised step at once (on a batched
-env's arrays, :class:`~sb3_twodrl.common.infos.BatchInfos`, without building its dicts); a user's
+maps them to ``(r_R, r_P)``. The named modes work on a whole vectorised step at once; a user's
 callable maps one env's ``(reward, info)``.
 """
 
@@ -12,8 +11,6 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
-
-from sb3_twodrl.common.infos import BatchInfos
 
 RewardSplit = Callable[[float, dict[str, Any]], tuple[float, float]]
 BatchSplit = Callable[[np.ndarray, Sequence[dict[str, Any]]], tuple[np.ndarray, np.ndarray]]
@@ -27,9 +24,6 @@ def _info_values(infos: Sequence[dict[str, Any]], key: str, mode: str) -> np.nda
     :raises ValueError: naming the mode, the key and the env if one is missing, or if a value is not
         a real scalar (a string, even ``"0"``, None or a bool is an error, not a number)
     """
-    column = infos.column(key) if isinstance(infos, BatchInfos) else None
-    if column is not None and column.dtype.kind in "iuf":
-        return column.astype(np.float64, copy=False)
     try:
         values = np.array([info[key] for info in infos])
     except KeyError:
@@ -70,15 +64,13 @@ def split_none(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np
 
 def split_auto(rewards: np.ndarray, infos: Sequence[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
     """Per env: ``info`` if ``info["punishment"]`` exists, else ``cost`` if ``info["cost"]`` exists, else ``sign``."""
-    if isinstance(infos, BatchInfos) and infos.column("punishment") is not None:
-        return split_info(rewards, infos)
     keyed = ["punishment" in info or "cost" in info for info in infos]
     if not any(keyed):
         return split_sign(rewards, infos)
     if all("punishment" in info for info in infos):
         return split_info(rewards, infos)
     reward_r, reward_p = split_sign(rewards, infos)
-    for idx in np.flatnonzero(keyed):
+    for idx in np.flatnonzero(keyed).tolist():
         split = split_info if "punishment" in infos[idx] else split_cost
         (reward_r[idx],), (reward_p[idx],) = split(rewards[idx : idx + 1], [infos[idx]])
     return reward_r, reward_p

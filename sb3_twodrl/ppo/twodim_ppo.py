@@ -121,7 +121,6 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
             max_temperature=max_temperature,
             interest_coef=interest_coef,
             policy_kwargs=policy_kwargs,
-            _init_setup_model=_init_setup_model,
         )
         super().__init__(
             policy,
@@ -156,10 +155,12 @@ class TwoDimPPO(TwoDimOnPolicyMixin, PPO):
         """PPO's epochs of minibatch updates: clipped surrogate on the utility, each critic on its own target."""
         self.policy.set_training_mode(True)
         self._update_learning_rate(self.policy.optimizer)
-        clip_range = self.clip_range(self._current_progress_remaining)  # type: ignore[operator]
+        assert callable(self.clip_range)  # a schedule since _setup_model, as clip_range_vf
+        clip_range = self.clip_range(self._current_progress_remaining)
         clip_range_vf = None
         if self.clip_range_vf is not None:
-            clip_range_vf = self.clip_range_vf(self._current_progress_remaining)  # type: ignore[operator]
+            assert callable(self.clip_range_vf)
+            clip_range_vf = self.clip_range_vf(self._current_progress_remaining)
 
         entropy_losses, pg_losses, value_losses, punishment_value_losses, clip_fractions = [], [], [], [], []
         interest_losses: list[float] = []

@@ -1,11 +1,9 @@
 """The stock arms of the experiments: SB3's A2C and PPO with the same results, bit for bit, in less time.
 
-:class:`FastActorCriticPolicy` computes SB3's forward pass and action scores with the library's tensor
-operations (:mod:`sb3_twodrl.common.fast`, the same operations with fewer Python calls) and a
-multi-tensor optimizer; :class:`~sb3_twodrl.common.infos.BatchInfosMixin` reads a batched env's info
-arrays without building every env's dict. Neither changes a number: ``tests/test_fast.py`` checks the
-parameters after learning against stock SB3's bitwise. The 2D-RL algorithms have both already, so the
-two arms of a comparison run the same pipeline.
+:class:`FastActorCriticPolicy` computes SB3's action scores with the library's ``Categorical`` formulas
+(:mod:`sb3_twodrl.common.fast`, the same operations with fewer Python calls) and a multi-tensor optimizer.
+Neither changes a number: ``tests/test_fast.py`` checks the parameters after learning against stock SB3's
+bitwise. The 2D-RL algorithms have both already, so the two arms of a comparison run the same pipeline.
 """
 
 from typing import ClassVar
@@ -23,39 +21,46 @@ from sb3_twodrl.common.fast import (
     categorical_entropy,
     categorical_log_prob,
     categorical_sample,
-    latents,
-    linear,
     normalized,
 )
-from sb3_twodrl.common.infos import BatchInfosMixin
 
 
 class FastForwardMixin:
-    """``forward`` and ``evaluate_actions`` of an ``ActorCriticPolicy`` by :func:`~sb3_twodrl.common.fast.latents`
-    and, for ``Discrete`` actions, ``Categorical``'s formulas on the tensors: SB3's results, bit for bit."""
+    """``forward`` and ``evaluate_actions`` of an ``ActorCriticPolicy`` with, for ``Discrete`` actions,
+    ``Categorical``'s formulas on the tensors (:mod:`sb3_twodrl.common.fast`): SB3's results, bit for bit."""
 
     action_space: spaces.Space
     action_net: nn.Module
     value_net: nn.Module
+    mlp_extractor: nn.Module
+    share_features_extractor: bool
 
     def _categorical(self) -> bool:
         return isinstance(self.action_space, spaces.Discrete)
 
+    def _latents(self, obs: PyTorchObs) -> tuple[th.Tensor, th.Tensor]:
+        """The actor's and the critic's latent features, as ``ActorCriticPolicy.forward`` computes them."""
+        features = self.extract_features(obs)  # type: ignore[attr-defined]
+        if self.share_features_extractor:
+            return self.mlp_extractor(features)
+        pi_features, vf_features = features
+        return self.mlp_extractor.forward_actor(pi_features), self.mlp_extractor.forward_critic(vf_features)
+
     def forward(self, obs: th.Tensor, deterministic: bool = False) -> tuple[th.Tensor, th.Tensor, th.Tensor]:
         if not self._categorical():
             return super().forward(obs, deterministic)  # type: ignore[misc]
-        latent_pi, latent_vf = latents(self, obs)  # type: ignore[arg-type]
-        values = linear(self.value_net, latent_vf)
-        log_probs = normalized(linear(self.action_net, latent_pi))
+        latent_pi, latent_vf = self._latents(obs)
+        values = self.value_net(latent_vf)
+        log_probs = normalized(self.action_net(latent_pi))
         actions = th.argmax(F.softmax(log_probs, dim=-1), dim=1) if deterministic else categorical_sample(log_probs)
         return actions, values, categorical_log_prob(log_probs, actions)
 
     def evaluate_actions(self, obs: PyTorchObs, actions: th.Tensor) -> tuple[th.Tensor, th.Tensor, th.Tensor | None]:
         if not self._categorical():
             return super().evaluate_actions(obs, actions)  # type: ignore[misc]
-        latent_pi, latent_vf = latents(self, obs)  # type: ignore[arg-type]
-        log_probs = normalized(linear(self.action_net, latent_pi))
-        values = linear(self.value_net, latent_vf)
+        latent_pi, latent_vf = self._latents(obs)
+        log_probs = normalized(self.action_net(latent_pi))
+        values = self.value_net(latent_vf)
         return values, categorical_log_prob(log_probs, actions), categorical_entropy(log_probs)
 
 
@@ -68,13 +73,13 @@ class FastActorCriticPolicy(FastForwardMixin, ActorCriticPolicy):
         self.optimizer = build_optimizer(self, lr_schedule)
 
 
-class BatchedA2C(BatchInfosMixin, A2C):
+class BatchedA2C(A2C):
     """SB3's ``A2C``; its ``MlpPolicy`` is :class:`FastActorCriticPolicy`."""
 
     policy_aliases: ClassVar[dict[str, type[BasePolicy]]] = {**A2C.policy_aliases, "MlpPolicy": FastActorCriticPolicy}
 
 
-class BatchedPPO(BatchInfosMixin, PPO):
+class BatchedPPO(PPO):
     """SB3's ``PPO``; its ``MlpPolicy`` is :class:`FastActorCriticPolicy`."""
 
     policy_aliases: ClassVar[dict[str, type[BasePolicy]]] = {**PPO.policy_aliases, "MlpPolicy": FastActorCriticPolicy}
