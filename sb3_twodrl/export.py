@@ -20,15 +20,22 @@ The command (``--algo``: the saved model's algorithm, default twoda2c)::
 
     sb3-twodrl-export model.zip policy.pt [--algo a2c]
     sb3-twodrl-export model.zip policy.onnx --format onnx
+
+An input stage (``input_stage``, a torch module with an ``input_shape`` and optionally an ``input_dtype``) goes in
+front of the actor, so that the graph takes what a device measures and holds the observation's preprocessing: with
+``--input-stage ENV_ID`` the command asks the env for it, as its class's ``deploy_input(**env_kwargs)`` (options by
+``--env-kwargs key:value``, values as Python literals); the Nomad envs give their sensors' ranges and odometry in cm.
 """
 
 from __future__ import annotations
 
 import argparse
+import ast
 import copy
 import json
 import warnings
 from pathlib import Path
+from typing import Any
 
 import torch as th
 from gymnasium import spaces
@@ -36,6 +43,18 @@ from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.policies import ActorCriticPolicy
 from stable_baselines3.common.preprocessing import is_image_space
 from torch import nn
+
+
+class StagedActor(nn.Module):
+    """An input stage, then the actor: raw input -> observation -> action."""
+
+    def __init__(self, stage: nn.Module, actor: nn.Module) -> None:
+        super().__init__()
+        self.stage = stage
+        self.actor = actor
+
+    def forward(self, raw: th.Tensor) -> th.Tensor:
+        return self.actor(self.stage(raw))
 
 
 class DeterministicActor(nn.Module):
@@ -78,30 +97,50 @@ def _actor(policy: ActorCriticPolicy) -> DeterministicActor:
     return copy.deepcopy(actor).to("cpu").eval()
 
 
-def _meta(model: BaseAlgorithm, shape: tuple[int, ...], n_actions: int) -> str:
+def _staged(
+    policy: ActorCriticPolicy, shape: tuple[int, ...], input_stage: nn.Module | None
+) -> tuple[nn.Module, tuple[int, ...], th.dtype]:
+    """The module to export, the shape of one input and its dtype: the actor, behind ``input_stage`` if given.
+
+    :raises TypeError: if ``input_stage`` is not a torch module with an ``input_shape``
+    """
+    actor = _actor(policy)
+    if input_stage is None:
+        return actor, shape, th.float32
+    if not isinstance(input_stage, nn.Module) or not isinstance(getattr(input_stage, "input_shape", None), tuple):
+        raise TypeError(f"input_stage must be a torch module with an input_shape tuple, got {input_stage!r}")
+    stage = copy.deepcopy(input_stage).to("cpu").eval()
+    return StagedActor(stage, actor), input_stage.input_shape, getattr(input_stage, "input_dtype", th.float32)
+
+
+def _meta(model: BaseAlgorithm, shape: tuple[int, ...], dtype: th.dtype, n_actions: int, stage: str) -> str:
     """What the file holds beside the actor, as JSON: the algorithm, the input's and the output's layout."""
     return json.dumps(
         {
             "algorithm": type(model).__name__,
-            "observation_shape": list(shape),
+            "observation_shape": list(model.policy.observation_space.shape or ()),
+            "input_stage": stage,
             "n_actions": n_actions,
-            "input": f"float32 (n, {', '.join(map(str, shape))})",
+            "input": f"{str(dtype).removeprefix('torch.')} (n, {', '.join(map(str, shape))})",
             "output": "int64 (n,) argmax action (= model.predict(obs, deterministic=True))",
         }
     )
 
 
-def export_policy(model: BaseAlgorithm, path: str | Path) -> Path:
-    """Write ``model``'s deterministic actor as TorchScript (CPU); returns the path."""
+def export_policy(model: BaseAlgorithm, path: str | Path, input_stage: nn.Module | None = None) -> Path:
+    """Write ``model``'s deterministic actor (behind ``input_stage``, if given) as TorchScript (CPU); the path."""
     policy, shape, n_actions = _checked(model)
-    scripted = th.jit.script(_actor(policy))
+    module, shape, dtype = _staged(policy, shape, input_stage)
+    scripted = th.jit.script(module)
     path = Path(path)
-    th.jit.save(scripted, str(path), _extra_files={"meta.json": _meta(model, shape, n_actions)})
+    stage = type(input_stage).__name__ if input_stage is not None else ""
+    th.jit.save(scripted, str(path), _extra_files={"meta.json": _meta(model, shape, dtype, n_actions, stage)})
     return path
 
 
-def export_onnx(model: BaseAlgorithm, path: str | Path, opset: int = 17) -> Path:
-    """Write ``model``'s deterministic actor as ONNX (input ``obs``, output ``action``, batch axis free).
+def export_onnx(model: BaseAlgorithm, path: str | Path, opset: int = 17, input_stage: nn.Module | None = None) -> Path:
+    """Write ``model``'s deterministic actor (behind ``input_stage``, if given) as ONNX (input ``obs``, output
+    ``action``, batch axis free).
 
     Uses torch's TorchScript-based exporter (``dynamo=False``): the newer exporter needs the
     ``onnxscript`` package, which the ``onnx`` extra does not install. The metadata of
@@ -110,12 +149,13 @@ def export_onnx(model: BaseAlgorithm, path: str | Path, opset: int = 17) -> Path
     import onnx
 
     policy, shape, n_actions = _checked(model)
+    module, shape, dtype = _staged(policy, shape, input_stage)
     path = Path(path)
-    example = th.zeros((1, *shape), dtype=th.float32)
+    example = th.zeros((1, *shape), dtype=dtype)
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", category=DeprecationWarning)
         th.onnx.export(
-            _actor(policy),
+            module,
             (example,),
             str(path),
             dynamo=False,
@@ -125,9 +165,41 @@ def export_onnx(model: BaseAlgorithm, path: str | Path, opset: int = 17) -> Path
             opset_version=opset,
         )
     graph = onnx.load(str(path))
-    graph.metadata_props.add(key="meta.json", value=_meta(model, shape, n_actions))
+    stage = type(input_stage).__name__ if input_stage is not None else ""
+    graph.metadata_props.add(key="meta.json", value=_meta(model, shape, dtype, n_actions, stage))
     onnx.save(graph, str(path))
     return path
+
+
+def deploy_input(env_id: str, env_kwargs: dict[str, Any] | None = None) -> nn.Module:
+    """The input stage the env ``env_id`` offers for ``env_kwargs``: its class's ``deploy_input(**options)``.
+
+    :raises ValueError: if the env's class offers none
+    """
+    import gymnasium as gym
+    from gymnasium.envs.registration import load_env_creator
+
+    spec = gym.spec(env_id)
+    creator = spec.entry_point if callable(spec.entry_point) else load_env_creator(spec.entry_point)
+    offer = getattr(creator, "deploy_input", None)
+    if offer is None:
+        raise ValueError(f"--input-stage {env_id}: its class {creator!r} offers no deploy_input")
+    stage: nn.Module = offer(**{**spec.kwargs, **(env_kwargs or {})})
+    return stage
+
+
+def _literal_options(pairs: list[str]) -> dict[str, Any]:
+    """``key:value`` strings as a dict, each value a Python literal (``map:'"office.json"'``)."""
+    options = {}
+    for pair in pairs:
+        key, sep, value = pair.partition(":")
+        if not sep or not key:
+            raise ValueError(f"--env-kwargs takes key:value pairs, got {pair!r}")
+        try:
+            options[key] = ast.literal_eval(value)
+        except (ValueError, SyntaxError) as err:
+            raise ValueError(f"--env-kwargs {key}: {value!r} is not a Python literal (quote strings: '\"x\"')") from err
+    return options
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -142,12 +214,22 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("out", type=Path, help="file to write (.pt for TorchScript, .onnx for ONNX)")
     parser.add_argument("--format", choices=("torchscript", "onnx"), default="torchscript", help="default torchscript")
     parser.add_argument("--algo", choices=sorted(ALGOS), default="twoda2c", help="the model's algorithm (twoda2c)")
+    parser.add_argument("--input-stage", metavar="ENV_ID", help="put the env's deploy input stage before the actor")
+    parser.add_argument("--env-kwargs", nargs="+", default=[], metavar="KEY:VALUE", help="the env's options")
     args = parser.parse_args(argv)
     if args.format == "onnx":
         require_extra("onnx", "onnx")
+    stage = None
+    if args.input_stage is not None:
+        try:
+            stage = deploy_input(args.input_stage, _literal_options(args.env_kwargs))
+        except ValueError as err:
+            parser.error(str(err))
     model = ALGOS[args.algo].load(args.model, device="cpu")
-    export = export_onnx if args.format == "onnx" else export_policy
-    print(f"wrote {export(model, args.out)}")
+    if args.format == "onnx":
+        print(f"wrote {export_onnx(model, args.out, input_stage=stage)}")
+    else:
+        print(f"wrote {export_policy(model, args.out, input_stage=stage)}")
 
 
 if __name__ == "__main__":

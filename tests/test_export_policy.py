@@ -144,3 +144,37 @@ def test_continuous_actions_are_refused(tmp_path):
     model = TwoDimA2C("MlpPolicy", "Pendulum-v1", seed=0, device="cpu")
     with pytest.raises(ValueError, match=r"Box observations and Discrete actions only.*action_space=Box"):
         export_policy(model, tmp_path / "p.pt")
+
+
+@pytest.mark.parametrize("fmt", ["torchscript", "onnx"])
+def test_the_exported_policy_takes_the_robots_raw_readings(tmp_path, fmt):
+    """With the env's input stage (``--input-stage``), the exported graph takes ranges and odometry in cm and
+    chooses ``model.predict``'s action on the env's observation of the same state, at every lattice cell."""
+    from stable_baselines3.common.env_util import make_vec_env
+
+    from sb3_twodrl import TwoDimA2C
+    from sb3_twodrl.export import deploy_input, export_onnx, export_policy
+    from twodrl_envs.nomad.core import office_core
+
+    if fmt == "onnx":
+        pytest.importorskip("onnxruntime")
+    options = {"map": "generated:S:4"}
+    model = TwoDimA2C("MlpPolicy", make_vec_env("NomadOffice-v0", n_envs=4, seed=0, env_kwargs=options), seed=0)
+    generator = th.Generator().manual_seed(0)
+    with th.no_grad():  # weights that prefer different actions in different cells
+        for parameter in model.policy.parameters():
+            parameter.copy_(th.randn(parameter.shape, generator=generator))
+    core = office_core(options["map"])
+    raw = np.concatenate([core.ranges, core.lattice.cells], axis=1)  # what the robot measures, cm
+    expected, _ = model.predict(np.concatenate([core.readings, core.cell_odometry], axis=1), deterministic=True)
+    stage = deploy_input("NomadOffice-v0", options)
+    if fmt == "onnx":
+        import onnxruntime
+
+        path = export_onnx(model, tmp_path / "policy.onnx", input_stage=stage)
+        actions = onnxruntime.InferenceSession(str(path)).run(["action"], {"obs": raw})[0]
+    else:
+        path = export_policy(model, tmp_path / "policy.pt", input_stage=stage)
+        actions = th.jit.load(str(path))(th.as_tensor(raw)).numpy()
+    assert len(set(expected.tolist())) > 1  # a policy that does not choose one action everywhere
+    np.testing.assert_array_equal(actions, expected)

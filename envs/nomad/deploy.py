@@ -9,12 +9,10 @@ float64, then float32). ``sb3-twodrl-export --raw-input`` puts it in front of th
 holds the normalisation and the map's bounds.
 """
 
-from __future__ import annotations
-
 from pathlib import Path
 
 import numpy as np
-import torch as th
+import torch
 from torch import nn
 
 from twodrl_envs.nomad import sensors
@@ -24,11 +22,11 @@ from twodrl_envs.nomad.geometry import load_map
 class RawObservation(nn.Module):
     """Raw ranges (cm) and odometry (cm) -> the observation of an env on ``map`` (module docstring)."""
 
-    input_dtype = th.float64
-    low: th.Tensor
-    inv_scale: th.Tensor
-    origin: th.Tensor
-    extent: th.Tensor
+    input_dtype = torch.float64
+    low: torch.Tensor
+    inv_scale: torch.Tensor
+    origin: torch.Tensor
+    extent: torch.Tensor
 
     def __init__(self, map: str | Path | None = None, observe_odometry: bool = True) -> None:
         super().__init__()
@@ -37,15 +35,17 @@ class RawObservation(nn.Module):
         x0, y0, x1, y1 = load_map(map).bounds
         self.observe_odometry = observe_odometry
         self.input_shape = (sensors.N_READINGS + (2 if observe_odometry else 0),)
-        self.register_buffer("low", th.as_tensor(sensors.LOW_CM, dtype=th.float64))
-        self.register_buffer("inv_scale", th.as_tensor(1.0 / (sensors.HIGH_CM - sensors.LOW_CM), dtype=th.float64))
-        self.register_buffer("origin", th.as_tensor(np.array([x0, y0]), dtype=th.float64))
-        self.register_buffer("extent", th.as_tensor(np.array([x1 - x0, y1 - y0]), dtype=th.float64))
+        self.register_buffer("low", torch.as_tensor(sensors.LOW_CM, dtype=torch.float64))
+        self.register_buffer(
+            "inv_scale", torch.as_tensor(1.0 / (sensors.HIGH_CM - sensors.LOW_CM), dtype=torch.float64)
+        )
+        self.register_buffer("origin", torch.as_tensor(np.array([x0, y0]), dtype=torch.float64))
+        self.register_buffer("extent", torch.as_tensor(np.array([x1 - x0, y1 - y0]), dtype=torch.float64))
 
-    def forward(self, raw: th.Tensor) -> th.Tensor:
+    def forward(self, raw: torch.Tensor) -> torch.Tensor:
         raw = raw.double()
-        readings = th.clamp((raw[:, : sensors.N_READINGS] - self.low) * self.inv_scale, 0.0, 1.0)
+        readings = torch.clamp((raw[:, : sensors.N_READINGS] - self.low) * self.inv_scale, 0.0, 1.0)
         if not self.observe_odometry:
             return readings.float()
-        odometry = th.clamp((raw[:, sensors.N_READINGS :] - self.origin) / self.extent, 0.0, 1.0)
-        return th.cat([readings.float(), odometry.float()], dim=1)
+        odometry = torch.clamp((raw[:, sensors.N_READINGS :] - self.origin) / self.extent, 0.0, 1.0)
+        return torch.cat([readings.float(), odometry.float()], dim=1)

@@ -137,6 +137,14 @@ class NomadOfficeEnv(gym.Env):
         self._setup(core, robot, observe_odometry, render_mode, observation, starts, progress)
 
     @classmethod
+    def deploy_input(cls, map: str | Path | None = None, observe_odometry: bool = True, **_: Any) -> Any:
+        """The input stage of an exported policy (``sb3-twodrl-export --input-stage``): the robot's ranges and
+        odometry in cm to this env's observation (:class:`~twodrl_envs.nomad.deploy.RawObservation`)."""
+        from twodrl_envs.nomad.deploy import RawObservation
+
+        return RawObservation(map, observe_odometry)
+
+    @classmethod
     def training_settings(cls, **options: Any) -> dict[str, Any] | None:
         """Training settings derived from the map of an env made with ``options``; None on the paper's maps.
 
