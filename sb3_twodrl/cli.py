@@ -96,6 +96,7 @@ def report_goal_rate(argv: list[str], episodes: int = 20) -> float | None:
     goals: list[bool] = []
     obs = env.reset()
     while len(goals) < episodes:
+        assert not isinstance(obs, tuple), "tuple observations: SB3 predicts on arrays and dicts"
         actions, _ = model.predict(obs, deterministic=True)
         obs, _, dones, infos = env.step(actions)
         if dones[0]:

@@ -107,10 +107,11 @@ def _staged(
     actor = _actor(policy)
     if input_stage is None:
         return actor, shape, th.float32
-    if not isinstance(input_stage, nn.Module) or not isinstance(getattr(input_stage, "input_shape", None), tuple):
+    input_shape = getattr(input_stage, "input_shape", None)
+    if not isinstance(input_stage, nn.Module) or not isinstance(input_shape, tuple):
         raise TypeError(f"input_stage must be a torch module with an input_shape tuple, got {input_stage!r}")
-    stage = copy.deepcopy(input_stage).to("cpu").eval()
-    return StagedActor(stage, actor), input_stage.input_shape, getattr(input_stage, "input_dtype", th.float32)
+    dtype: th.dtype = getattr(input_stage, "input_dtype", th.float32)
+    return StagedActor(copy.deepcopy(input_stage).to("cpu").eval(), actor), input_shape, dtype
 
 
 def _meta(model: BaseAlgorithm, shape: tuple[int, ...], dtype: th.dtype, n_actions: int, stage: str) -> str:
@@ -176,15 +177,13 @@ def deploy_input(env_id: str, env_kwargs: dict[str, Any] | None = None) -> nn.Mo
 
     :raises ValueError: if the env's class offers none
     """
-    import gymnasium as gym
-    from gymnasium.envs.registration import load_env_creator
+    from sb3_twodrl.hyperparams import env_class
 
-    spec = gym.spec(env_id)
-    creator = spec.entry_point if callable(spec.entry_point) else load_env_creator(spec.entry_point)
+    creator, registered = env_class(env_id)
     offer = getattr(creator, "deploy_input", None)
     if offer is None:
         raise ValueError(f"--input-stage {env_id}: its class {creator!r} offers no deploy_input")
-    stage: nn.Module = offer(**{**spec.kwargs, **(env_kwargs or {})})
+    stage: nn.Module = offer(**{**registered, **(env_kwargs or {})})
     return stage
 
 

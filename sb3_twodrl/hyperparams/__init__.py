@@ -27,7 +27,7 @@ from typing import Any
 
 import yaml
 
-__all__ = ["PACKAGED", "Hyperparams", "env_settings", "evaluate", "hyperparams_path", "load", "read_entry"]
+__all__ = ["PACKAGED", "Hyperparams", "env_class", "env_settings", "evaluate", "hyperparams_path", "load", "read_entry"]
 
 PACKAGED = ("a2c", "ppo", "twoda2c", "twodppo")
 """The algorithms this package ships a file for."""
@@ -122,6 +122,21 @@ def _schedule(key: str, value: Any) -> Any:
     return LinearSchedule(float(start), 0.0, 1.0)  # rl-zoo3's SimpleLinearSchedule: initial * progress_remaining
 
 
+def env_class(env_id: str) -> tuple[Any, dict[str, Any]]:
+    """The registered entry point of ``env_id`` (its class, or the function that makes it) and its registered kwargs.
+
+    :raises ValueError: if ``env_id`` is registered without an entry point
+    """
+    import gymnasium as gym
+    from gymnasium.envs.registration import load_env_creator
+
+    spec = gym.spec(env_id)
+    if spec.entry_point is None:
+        raise ValueError(f"{env_id} is registered without an entry point")
+    creator = spec.entry_point if callable(spec.entry_point) else load_env_creator(spec.entry_point)
+    return creator, dict(spec.kwargs)
+
+
 def env_settings(env_id: str, env_kwargs: dict[str, Any] | None = None) -> dict[str, Any] | None:
     """The settings the env ``env_id`` derives from its options ``env_kwargs`` (module docstring), or None.
 
@@ -129,15 +144,11 @@ def env_settings(env_id: str, env_kwargs: dict[str, Any] | None = None) -> dict[
 
     :raises ValueError: if the class returns something else than None or a dict of the known keys
     """
-    import gymnasium as gym
-    from gymnasium.envs.registration import load_env_creator
-
-    spec = gym.spec(env_id)
-    creator = spec.entry_point if callable(spec.entry_point) else load_env_creator(spec.entry_point)
+    creator, registered = env_class(env_id)
     derive = getattr(creator, "training_settings", None)
     if derive is None:
         return None
-    settings = derive(**{**spec.kwargs, **(env_kwargs or {})})
+    settings = derive(**{**registered, **(env_kwargs or {})})
     known = {"hyperparams", "env_kwargs", "eval_env_kwargs", "note"}
     if settings is not None and (not isinstance(settings, dict) or set(settings) - known):
         raise ValueError(f"{env_id}: training_settings must return None or a dict of {sorted(known)}, got {settings!r}")
