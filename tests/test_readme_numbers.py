@@ -94,7 +94,7 @@ def test_every_number_the_readme_quotes_is_in_the_table_it_links() -> None:
     [
         ("-0.2679 [-0.4076, -0.1282]", "-0.2679 [-0.4076, -0.1283]"),  # one digit of an interval
         ("7/10 [0.40, 0.89]", "7/10 [0.40, 0.90]"),
-        ("0.334 of training episodes", "0.343 of training episodes"),
+        ("in 10/10 [0.72, 1.00] runs", "in 10/10 [0.72, 0.99] runs"),
         ("+0.0020 [+0.0006, +0.0034]", "+0.0020 [+0.0006, +0.0035]"),
         ("| -7.9 |", "| +7.9 |"),  # the sign
         ("0.94 [0.91, 0.97]", "0.94 [0.91, 0.98]"),

@@ -242,7 +242,7 @@ class Experiment:
             protocol=protocol,
             seeds=tuple(spec["seeds"]),
             arms=arms,
-            report=spec["report"],
+            report=spec.get("report"),
             rules=dict(spec.get("rules") or {}),
             grid=copy.deepcopy(spec.get("grid")),
         )
