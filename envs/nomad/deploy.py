@@ -5,7 +5,7 @@ odometry position scaled by the map's bounds. On the robot, :class:`RawObservati
 measures, float64 ``(n, 34)``: the 16 sonar and 16 IR ranges in cm (sensor order of :mod:`twodrl_envs.nomad.sensors`)
 then the odometry ``(x, y)`` in cm (``(n, 32)`` without odometry), and gives the observation exactly as the env
 computes it (:func:`~twodrl_envs.nomad.sensors.normalise`, :meth:`~twodrl_envs.nomad.core.OfficeCore.odometry`, in
-float64, then float32). ``sb3-twodrl-export --raw-input`` puts it in front of the actor, so the exported graph
+float64, then float32). ``sb3-twodrl-export --input-stage`` puts it in front of the actor, so the exported graph
 holds the normalisation and the map's bounds.
 """
 
