@@ -84,15 +84,13 @@ class LearnedStop(BaseCallback):
 
 def run(algo: str, map_: str, seed: int, eval_every: int) -> dict[str, object]:
     settings = map_settings(NomadOfficeEnv(map_).robot)
-    hp = hyperparams.load(algo, ENV)
-    kwargs = dict(hp.kwargs)
-    kwargs["gamma"] = settings.gamma
-    env = make_train_env(ENV, hp.n_envs, seed, "batched", {"map": map_, **settings.env_kwargs()})
-    test_env = make_test_env(ENV, TEST_EPISODES, "batched", {"map": map_, **settings.eval_env_kwargs()})
+    hp = hyperparams.load(algo, ENV, env_kwargs={"map": map_})  # the packaged entry with the derived settings
+    env = make_train_env(ENV, hp.n_envs, seed, "batched", hp.env_kwargs)
+    test_env = make_test_env(ENV, TEST_EPISODES, "batched", hp.eval_env_kwargs)
     test_env.seed(seed)
-    model = ALGOS[algo](hp.policy, env, seed=seed, device="cpu", **kwargs)
+    model = ALGOS[algo](hp.policy, env, seed=seed, device="cpu", **hp.kwargs)
     stop = LearnedStop(test_env, eval_every, settings.max_episode_steps)
-    model.learn(settings.n_timesteps, callback=stop)
+    model.learn(hp.n_timesteps, callback=stop)
     if stop.learned_steps < 0:  # the budget ran out between evaluations: one last one
         stop.pause()
         stop.rate = goal_rate(model, test_env, settings.max_episode_steps)

@@ -14,7 +14,13 @@ before the time limit. :func:`map_settings` derives, from the map's lattice dist
   discounted over the path keeps about ``e**-1`` of its value at the start (the punishment discount stays the
   paper's short one);
 * the **time limit** ``max(300, 3 D)`` steps, ``D`` the most moves from any start cell to the goal;
-* the **budget** ``n_timesteps = min(max(1e6, 40,000 L), 2e7)`` (rounded up to 1e5).
+* the **budget** ``n_timesteps = min(max(1e6, 40,000 L), 2e7)`` (rounded up to 1e5);
+* on offices longer than 80 moves (size L and beyond), where the value of the goal differs little between
+  neighbouring cells far from it (``gamma**d (1 - gamma)``), two more: the **entropy bonus** drops from the
+  packaged 0.05 to ``LONG_ENT_COEF`` (the bonus otherwise outweighs those differences and keeps the far policy
+  near uniform) and the **progress signal** (``progress=LONG_PROGRESS``, lattice robots; a move closer to the goal
+  adds to ``r_R``, one farther to ``r_P``: :class:`~twodrl_envs.nomad.core.LatticeOutcomes`) gives every move a
+  signal of its own.
 
 ``r_R >= 0`` and ``r_P >= 0`` keep their meaning: nothing here changes an evaluation. The rules were set on the
 development maps (``docs/own_office.md``'s example, the shipped ``corridor``, generated map seeds 0-99) before
@@ -37,6 +43,10 @@ PAPER_MAPS = ("office", "open")
 """Shipped maps of the paper's experiment: their settings are the paper's (:func:`map_settings` gives None)."""
 SIZE_CLASSES = (("S", 30), ("M", 80), ("L", 200))
 """Size class by shortest path: S <= 30 moves, M 31-80, L 81-200; longer is XL."""
+LONG_MOVES = 80
+"""Shortest paths longer than this (size L and beyond) get the entropy bonus and the progress signal below."""
+LONG_ENT_COEF = 0.01
+LONG_PROGRESS = 0.05
 MEASURED_MOVES = 200
 """The longest shortest path the derived settings were measured on (``docs/own_office.md``); beyond it, a warning."""
 
@@ -62,6 +72,10 @@ class MapSettings:
     gamma: float
     max_episode_steps: int
     n_timesteps: int
+    ent_coef: float | None = None
+    """The entropy bonus where the map needs another than the packaged one, else None."""
+    progress: float = 0.0
+    """The progress signal's weight (0: none)."""
 
     @property
     def size(self) -> str:
@@ -70,11 +84,17 @@ class MapSettings:
 
     def hyperparams(self) -> dict[str, Any]:
         """Hyperparameters that replace the packaged ones."""
-        return {"gamma": self.gamma, "n_timesteps": self.n_timesteps}
+        hyperparams: dict[str, Any] = {"gamma": self.gamma, "n_timesteps": self.n_timesteps}
+        if self.ent_coef is not None:
+            hyperparams["ent_coef"] = self.ent_coef
+        return hyperparams
 
     def env_kwargs(self) -> dict[str, Any]:
         """Options of the training envs: exploring starts and the time limit."""
-        return {"starts": "uniform", "max_episode_steps": self.max_episode_steps}
+        options: dict[str, Any] = {"starts": "uniform", "max_episode_steps": self.max_episode_steps}
+        if self.progress:
+            options["progress"] = self.progress
+        return options
 
     def eval_env_kwargs(self) -> dict[str, Any]:
         """Options of the test envs: the map's start, the time limit."""
@@ -87,6 +107,10 @@ class MapSettings:
             f"{self.farthest}): gamma {self.gamma}, time limit {self.max_episode_steps} steps, "
             f"{self.n_timesteps:,} steps, training episodes from random reachable cells (exploring starts)"
         )
+        if self.ent_coef is not None:
+            text += f", entropy bonus {self.ent_coef}"
+        if self.progress:
+            text += f", progress signal {self.progress}"
         if self.shortest_path > MEASURED_MOVES:
             text += (
                 f"; WARNING: the shortest path is longer than the {MEASURED_MOVES} moves these settings were measured "
@@ -113,4 +137,6 @@ def map_settings(robot: Robot) -> MapSettings | None:
         gamma=round(max(0.9, 1.0 - 1.0 / moves), 3),
         max_episode_steps=max(300, 3 * farthest),
         n_timesteps=int(math.ceil(budget / 100_000) * 100_000),
+        ent_coef=LONG_ENT_COEF if moves > LONG_MOVES else None,
+        progress=LONG_PROGRESS if moves > LONG_MOVES and robot.on_lattice else 0.0,
     )
