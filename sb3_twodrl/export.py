@@ -177,9 +177,16 @@ def deploy_input(env_id: str, env_kwargs: dict[str, Any] | None = None) -> nn.Mo
 
     :raises ValueError: if the env's class offers none
     """
-    from sb3_twodrl.hyperparams import env_class
+    from gymnasium.error import Error
 
-    creator, registered = env_class(env_id)
+    from sb3_twodrl.hyperparams import env_class
+    from sb3_twodrl.zoo import import_gym_packages
+
+    import_gym_packages()  # the env packages that register IDs (entry-point group)
+    try:
+        creator, registered = env_class(env_id)
+    except Error as err:
+        raise ValueError(f"--input-stage {env_id}: {err}") from err
     offer = getattr(creator, "deploy_input", None)
     if offer is None:
         raise ValueError(f"--input-stage {env_id}: its class {creator!r} offers no deploy_input")

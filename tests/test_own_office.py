@@ -20,7 +20,7 @@ DOC = ROOT / "docs" / "own_office.md"
 def doc_commands() -> list[str]:
     """The doc's ``$`` commands of steps 2-4, in order, without the two error examples."""
     text = DOC.read_text()
-    steps = text[text.index("## 2. Check it") : text.index("## 5. Export")]
+    steps = text[text.index("## 2. Check it") : text.index("## 5. ")]
     commands = [line[2:] for line in steps.splitlines() if line.startswith("$ sb3-twodrl-")]
     return [c for c in commands if "narrow_door" not in c and "my_offce" not in c]
 
