@@ -18,6 +18,8 @@ import pytest
 import torch
 import yaml
 
+from tests.recording_cpu import RECORDING_KERNELS, WHY
+
 ROOT = Path(__file__).resolve().parents[1]
 COMMITTED = ROOT / "results" / "quick_preset" / "rows.csv"
 TIMINGS = ("wall_s",)
@@ -35,6 +37,7 @@ def read(path: Path, seed: int, epochs: int) -> list[dict[str, str]]:
     platform.machine().lower() not in ("x86_64", "amd64") or not torch.backends.mkl.is_available(),
     reason="the committed rows were made with MKL's reproducible kernels on x86-64",
 )
+@pytest.mark.skipif(not RECORDING_KERNELS, reason=WHY)
 def test_a_fresh_run_of_the_quick_preset_gives_the_committed_rows(tmp_path: Path) -> None:
     spec = yaml.safe_load((ROOT / "twodrl_bench" / "specs" / "quick_preset.yml").read_text())
     spec["protocol"]["epochs"], spec["seeds"] = 1, [0]

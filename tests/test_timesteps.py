@@ -13,6 +13,8 @@ import numpy as np
 import pytest
 import yaml
 
+from tests.recording_cpu import RECORDING_KERNELS, WHY
+
 pytest.importorskip("rl_zoo3")
 
 from twodrl_bench.timesteps import (
@@ -46,7 +48,13 @@ def _job(spec: dict[str, Any], arm: str, seed: int, out: Path, **protocol: Any) 
     return row
 
 
-@pytest.mark.parametrize("spec_name", ["benchmark/CliffWalking", "benchmark/Pendulum"])
+@pytest.mark.parametrize(
+    "spec_name",
+    [
+        "benchmark/CliffWalking",
+        pytest.param("benchmark/Pendulum", marks=pytest.mark.skipif(not RECORDING_KERNELS, reason=WHY)),
+    ],
+)
 def test_rows_equal_the_rows_of_the_command_it_replaces(tmp_path, spec_name: str) -> None:
     """The fixture holds rows that commit 01db862's benchmark command made on this machine (its
     ``made_by``): the job gives the same rows from the spec, ``wall_s`` aside, bit for bit. CliffWalking covers
