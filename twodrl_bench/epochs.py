@@ -40,8 +40,8 @@ from sb3_twodrl.hyperparams import evaluate
 from twodrl_bench import jobs
 from twodrl_bench.algorithms import algo_class
 from twodrl_bench.checkpoint import set_rng_state
-from twodrl_bench.experiment import PAPER_TRIALS, TRANSFER_SEED, Job
-from twodrl_bench.protocol import LEARNING, METRICS, ROUTES, trial_seed
+from twodrl_bench.experiment import Job
+from twodrl_bench.protocol import LEARNING, METRICS, PAPER_TRIALS, ROUTES, TRANSFER_SEED, trial_seed
 from twodrl_bench.trials import run_test_trials, tally, trial_outcomes
 from twodrl_bench.vec_env import make_test_env, make_train_env
 

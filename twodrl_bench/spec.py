@@ -5,8 +5,8 @@ A spec is packaged as ``twodrl_bench/specs/<study>.yml`` or, for a study of seve
 ``twodrl_bench/specs/<study>/<part>.yml``; its name is that path without ``.yml``. Fields
 (``docs/studies.md``): ``name``, ``env``, ``env_kwargs`` ({}), ``gym_packages`` ([twodrl_envs]), ``protocol``
 (the paper's epochs ``{epochs, learn_episodes, test_episodes}`` or ``{timesteps, eval_episodes}``, completed
-with the defaults of :class:`~twodrl_bench.experiment.EpochProtocol` or
-:class:`~twodrl_bench.experiment.TimestepsProtocol`), ``seeds``, ``arms`` (name -> ``{algo, override,
+with the defaults of :class:`~twodrl_bench.protocol.EpochProtocol` or
+:class:`~twodrl_bench.protocol.TimestepsProtocol`), ``seeds``, ``arms`` (name -> ``{algo, override,
 settings}``) and/or ``grid`` (points that expand into arms, kept in the spec for the report),
 ``rules`` (free-form, read by the report) and ``report`` (a module of :mod:`twodrl_bench.reports`, or a dotted
 path; optional, default None: the runner writes the rows only).
@@ -123,8 +123,8 @@ def validate(raw: Any, source: str = "spec") -> Spec:
 
 
 def _protocol(source: str, protocol: Any) -> dict[str, Any]:
-    """The protocol mapping completed with its defaults (:func:`twodrl_bench.experiment.protocol_of`)."""
-    from twodrl_bench.experiment import protocol_of
+    """The protocol mapping completed with its defaults (:func:`twodrl_bench.protocol.protocol_of`)."""
+    from twodrl_bench.protocol import protocol_of
 
     try:
         return protocol_of(protocol).as_dict()

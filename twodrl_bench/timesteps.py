@@ -1,6 +1,6 @@
 """The timesteps job: one (arm, seed) trained by rl-zoo3's ``ExperimentManager``, then a final deterministic evaluation.
 
-:func:`run` is the job of an experiment whose protocol is :class:`~twodrl_bench.experiment.TimestepsProtocol`. The
+:func:`run` is the job of an experiment whose protocol is :class:`~twodrl_bench.protocol.TimestepsProtocol`. The
 arm's model and envs are made as ``rl_zoo3.train`` makes them, from its resolved entry; the training envs'
 ``Monitor`` records every training episode's return and punishment events, from which come the learning curve and
 the training event rates; the final model then runs ``eval_episodes`` deterministic episodes on a fresh env seeded
@@ -45,7 +45,8 @@ from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.monitor import Monitor, ResultsWriter
 
 from twodrl_bench import jobs
-from twodrl_bench.experiment import Arm, Experiment, Job, TimestepsProtocol
+from twodrl_bench.experiment import Arm, Experiment, Job
+from twodrl_bench.protocol import TimestepsProtocol
 from twodrl_bench.settings import check_entry, timesteps_entry
 from twodrl_bench.settings import settings_file as settings_file_of
 

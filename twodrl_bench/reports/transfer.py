@@ -16,8 +16,8 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from twodrl_bench.experiment import PAPER_TRIALS
 from twodrl_bench.intervals import mean_ci, wilson
+from twodrl_bench.protocol import PAPER_TRIALS
 from twodrl_bench.reports import Part
 
 
