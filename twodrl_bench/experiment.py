@@ -3,7 +3,8 @@
 :meth:`Experiment.from_spec` reads a spec (:mod:`twodrl_bench.spec`: the YAML layer), reads each arm's
 settings (the env's entry of ``<algo>.yml``: packaged, rl-zoo3's own or in a folder) and applies its
 overrides, once; the result is frozen and holds everything a run needs. The defaults of a protocol are
-stated once, in its dataclass (:class:`~twodrl_bench.protocol.EpochProtocol`, :class:`~twodrl_bench.protocol.TimestepsProtocol`). The flow goes one way:
+stated once, in its dataclass (:class:`~twodrl_bench.protocol.EpochProtocol`,
+:class:`~twodrl_bench.protocol.TimestepsProtocol`). The flow goes one way:
 the runner (:mod:`twodrl_bench.runner`) builds an :class:`Experiment`, the experiment makes its
 :class:`Job` objects, the runner runs each by its protocol's module, which resumes it by :mod:`twodrl_bench.jobs`.
 
