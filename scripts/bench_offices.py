@@ -25,6 +25,7 @@ from stable_baselines3.common.callbacks import BaseCallback
 
 import twodrl_envs  # noqa: F401  (registers the IDs)
 from sb3_twodrl import TwoDimA2C, hyperparams
+from twodrl_bench.intervals import wilson
 from twodrl_bench.vec_env import make_test_env, make_train_env
 from twodrl_envs.nomad.core import office_core
 from twodrl_envs.nomad.office import NomadOfficeEnv
@@ -107,13 +108,6 @@ def run(algo: str, map_: str, seed: int, eval_every: int) -> dict[str, object]:
         "goal_rate": stop.rate,
         "budget": settings.n_timesteps,
     }
-
-
-def wilson(k: int, n: int) -> tuple[float, float]:
-    """95% Wilson interval of ``k`` successes in ``n``."""
-    z, p = 1.959964, k / n
-    centre, half = p + z * z / (2 * n), z * ((p * (1 - p) + z * z / (4 * n)) / n) ** 0.5
-    return (centre - half) / (1 + z * z / n), (centre + half) / (1 + z * z / n)
 
 
 def table(rows: list[dict[str, str]]) -> str:
