@@ -1,4 +1,4 @@
-"""``results/offices/table.md`` is what ``scripts/bench_offices.py --table`` makes of the committed rows, byte for byte."""
+"""``results/offices/table.md`` is what ``scripts/bench_offices.py --table`` makes of the committed rows."""
 
 import subprocess
 import sys
