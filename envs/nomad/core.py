@@ -271,6 +271,8 @@ class Robot:
     """
 
     on_lattice: bool = True
+    varying_readings: bool = True
+    """Whether a cell's readings vary from visit to visit (noise, recordings): learning them takes more samples."""
 
     def __init__(self, core: OfficeCore) -> None:
         self.core = core
@@ -336,6 +338,7 @@ class IdealRobot(Robot):
         self.step_sd_cm = step_sd_cm
         self.slip_sd_cm = slip_sd_cm
         self.on_lattice = step_sd_cm == 0.0 and slip_sd_cm == 0.0
+        self.varying_readings = noise is not None
 
     @cached_property
     def _sd_table(self) -> np.ndarray:
