@@ -34,6 +34,7 @@ from twodrl_envs.nomad.geometry import (
     is_generated,
     load_map,
     map_source,
+    reachable_from,
     swept_clearance,
 )
 from twodrl_envs.nomad.sensors import NoiseModel
@@ -293,14 +294,7 @@ class Robot:
     def start_cells(self) -> np.ndarray:
         """Cells an exploring start may draw: reachable from the map's start by :attr:`moves`, outside the goal,
         with a way to the goal (ascending indices)."""
-        reached = np.zeros(len(self.moves), dtype=bool)
-        reached[self.core.start_cell] = True
-        frontier = np.array([self.core.start_cell])
-        while len(frontier):
-            nxt = self.moves[frontier].ravel()
-            nxt = np.unique(nxt[nxt >= 0])
-            frontier = nxt[~reached[nxt]]
-            reached[frontier] = True
+        reached = reachable_from(self.moves, self.core.start_cell)
         return np.flatnonzero(reached & ~self.core.goal & np.isfinite(self.goal_distance))
 
     def cell_readings(self, cells: np.ndarray, keys: np.ndarray, steps: np.ndarray) -> np.ndarray:

@@ -363,17 +363,21 @@ def build_lattice(office: OfficeMap) -> Lattice:
         has = target >= 0
         clear = swept_clearance(cells[has], cells[target[has]], office.walls) > ROBOT_RADIUS_CM
         moves[np.flatnonzero(has)[clear], action] = target[has][clear]
-    reachable = np.zeros(n, dtype=bool)
-    start = grid[round((sx - origin[0]) / STEP_CM), round((sy - origin[1]) / STEP_CM)]
-    frontier = [int(start)]
-    reachable[start] = True
-    while frontier:
+    start = int(grid[round((sx - origin[0]) / STEP_CM), round((sy - origin[1]) / STEP_CM)])
+    return Lattice(cells, moves, reachable_from(moves, start), origin, grid.shape, grid)
+
+
+def reachable_from(moves: np.ndarray, start: int) -> np.ndarray:
+    """Cells ``(n_cells,)`` reachable from cell ``start`` by the move table ``moves`` (next cell or -1)."""
+    reached = np.zeros(len(moves), dtype=bool)
+    reached[start] = True
+    frontier = np.array([start])
+    while len(frontier):
         nxt = moves[frontier].ravel()
         nxt = np.unique(nxt[nxt >= 0])
-        nxt = nxt[~reachable[nxt]]
-        reachable[nxt] = True
-        frontier = nxt.tolist()
-    return Lattice(cells, moves, reachable, origin, grid.shape, grid)
+        frontier = nxt[~reached[nxt]]
+        reached[frontier] = True
+    return reached
 
 
 def check_goal_reachable(office: OfficeMap, lattice: Lattice) -> None:
