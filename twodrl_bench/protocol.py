@@ -87,10 +87,7 @@ class EpochProtocol:
     @classmethod
     def from_mapping(cls, raw: dict[str, Any]) -> EpochProtocol:
         """:raises ValueError: naming the key, for an unknown, missing or ill-typed key"""
-        names = [f.name for f in dataclasses.fields(cls)]
-        unknown = sorted(set(raw) - set(names))
-        if unknown:
-            raise ValueError(f"protocol of epochs takes only {names}, got {unknown!r}")
+        _check_fields(cls, raw, "epochs")
         for key in ("epochs", "learn_episodes", "test_episodes"):
             if key not in raw:
                 raise ValueError(f"protocol.{key} is missing (protocol: {raw!r})")
@@ -102,6 +99,14 @@ class EpochProtocol:
         if out["transfer"] is None:
             del out["transfer"]
         return out
+
+
+def _check_fields(cls: type, raw: dict[str, Any], label: str) -> None:
+    """``ValueError`` naming the keys of ``raw`` that are no field of the protocol dataclass ``cls``."""
+    names = [f.name for f in dataclasses.fields(cls)]
+    unknown = sorted(set(raw) - set(names))
+    if unknown:
+        raise ValueError(f"protocol of {label} takes only {names}, got {unknown}")
 
 
 def _transfer(transfer: Any, save_model: bool) -> dict[str, Any]:
@@ -151,10 +156,7 @@ class TimestepsProtocol:
     @classmethod
     def from_mapping(cls, raw: dict[str, Any]) -> TimestepsProtocol:
         """:raises ValueError: naming the key, for an unknown key or a bad budget, episode count or label"""
-        names = [f.name for f in dataclasses.fields(cls)]
-        unknown = sorted(set(raw) - set(names))
-        if unknown:
-            raise ValueError(f"protocol: the timesteps protocol takes only {names}, got {unknown}")
+        _check_fields(cls, raw, "timesteps")
         return cls(**{"timesteps": None, "eval_episodes": None, **raw})
 
     def as_dict(self) -> dict[str, Any]:
