@@ -12,7 +12,7 @@ its rows so far; a run that finds a checkpoint of its protocol continues from it
 rows an uninterrupted run produces (``wall_s`` aside, which adds the time before the interruption).
 At the end the model is saved (``models/<arm>_seed<seed>.zip``, loadable by ``<Algo>.load``). With a
 ``transfer`` protocol key (paper section 3.5) the saved policy then runs deterministic trials on another
-env (:func:`transfer_columns`), reported in the last epoch's row.
+env (:func:`twodrl_bench.trials.transfer_columns`), reported in the last epoch's row.
 
 :func:`run` is the epoch protocol's job (:func:`twodrl_bench.runner.run_job`): a job in, rows out; checkpoints and
 resume are every job's (:func:`twodrl_bench.jobs.resume`).
@@ -40,14 +40,12 @@ from sb3_twodrl.hyperparams import evaluate
 from twodrl_bench import jobs
 from twodrl_bench.algorithms import algo_class
 from twodrl_bench.checkpoint import set_rng_state
-from twodrl_bench.experiment import Job
-from twodrl_bench.protocol import LEARNING, METRICS, PAPER_TRIALS, ROUTES, TRANSFER_SEED, trial_seed
-from twodrl_bench.trials import run_test_trials, tally, trial_outcomes
+from twodrl_bench.experiment import Job, with_seed
+from twodrl_bench.protocol import LEARNING, METRICS, ROUTES, trial_seed
+from twodrl_bench.trials import run_test_trials, transfer_columns
 from twodrl_bench.vec_env import make_test_env, make_train_env
 
 Row = dict[str, Any]
-OWN_TRIALS = 10
-"""Trials of a transferred policy in its own training env (did it learn at all?)."""
 
 
 class EpochCallback(BaseCallback):
@@ -139,7 +137,7 @@ def _new_model(job: Job) -> BaseAlgorithm:
     n_envs = int(hp.pop("n_envs", 1))
     policy = hp.pop("policy", "MlpPolicy")
     experiment, protocol = job.experiment, job.protocol
-    env = make_train_env(experiment.env, n_envs, job.seed, protocol.vec_env, experiment.env_kwargs)
+    env = make_train_env(experiment.env, n_envs, job.seed, protocol.vec_env, job.env_kwargs)
     tb = str(Path(job.out_dir) / "tb") if protocol.tensorboard else None
     return algo_class(job.arm.algo)(policy, env, seed=job.seed, device="cpu", tensorboard_log=tb, **hp)
 
@@ -164,7 +162,7 @@ def train(job: Job) -> list[Row]:
             for stale in (Path(job.out_dir) / "tb").glob(f"{job.name}_*"):
                 shutil.rmtree(stale, ignore_errors=True)
     progress.write_text("".join(f"{row['epoch']}\n" for row in state["rows"]))
-    test_env = make_test_env(experiment.env, protocol.test_episodes, protocol.vec_env, experiment.env_kwargs)
+    test_env = make_test_env(experiment.env, protocol.test_episodes, protocol.vec_env, job.env_kwargs)
     nav = NavigationMetricsCallback(routes=ROUTES)
     epochs = EpochCallback(job, test_env, nav, state)
     if state["epoch"] < protocol.epochs:
@@ -185,32 +183,6 @@ def run(job: Job) -> list[Row]:
     transfer = job.protocol.transfer
     if transfer:
         model = algo_class(job.arm.algo).load(jobs.model_path(job.out_dir, job.name), device="cpu")
-        rows[-1].update(transfer_columns(model, job.experiment.env, dict(job.experiment.env_kwargs), transfer))
+        rows[-1].update(transfer_columns(model, job.experiment.env, job.env_kwargs, with_seed(transfer, job.seed)))
     jobs.finish(job)
     return rows
-
-
-def _outcomes(model: BaseAlgorithm, env_id: str, n: int, seed: int, env_kwargs: dict[str, Any]) -> list[str]:
-    """Outcomes of ``n`` deterministic trials on ``env_id`` (sub-env ``i`` seeded ``seed + i``)."""
-    env = make_test_env(env_id, n, env_kwargs=env_kwargs)
-    try:
-        return trial_outcomes(model, env, seed)
-    finally:
-        env.close()
-
-
-def transfer_columns(model: BaseAlgorithm, env: str, env_kwargs: dict[str, Any], transfer: dict[str, Any]) -> Row:
-    """Paper section 3.5: ``transfer["trials"]`` deterministic trials of ``model`` on ``transfer["env"]`` (the
-    first :data:`PAPER_TRIALS` are the paper's) and :data:`OWN_TRIALS` on its training env, counted by outcome;
-    ``env_kwargs`` go to both envs (``observe_odometry: False``: sensors only)."""
-    seed = transfer.get("seed", TRANSFER_SEED)
-    own = tally(_outcomes(model, env, OWN_TRIALS, seed + 10**4, env_kwargs))
-    outcomes = _outcomes(model, transfer["env"], transfer["trials"], seed, env_kwargs)
-    target = tally(outcomes)
-    return {
-        "transfer_env": transfer["env"],
-        "transfer_trials": transfer["trials"],
-        "transfer_paper_successes": tally(outcomes[:PAPER_TRIALS])["success"],
-        **{f"transfer_{key}": value for key, value in target.items()},
-        "own_env_success": own["success"] / OWN_TRIALS,
-    }

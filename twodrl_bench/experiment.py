@@ -149,6 +149,19 @@ class Experiment:
         return [Job(self, name, seed, str(out_dir)) for name in arms or self.arms for seed in self.seeds]
 
 
+SEED = "{seed}"
+"""What a string value of ``env_kwargs`` may hold to name the job's seed (:attr:`Job.env_kwargs`)."""
+
+
+def with_seed(value: Any, seed: int) -> Any:
+    """``value`` (a mapping, list or scalar of a spec) with :data:`SEED` in each string replaced by ``seed``."""
+    if isinstance(value, dict):
+        return {key: with_seed(item, seed) for key, item in value.items()}
+    if isinstance(value, list):
+        return [with_seed(item, seed) for item in value]
+    return value.replace(SEED, str(seed)) if isinstance(value, str) else value
+
+
 def deciding(spec: Spec, arms: set[str]) -> Spec:
     """What decides the rows of the jobs of ``arms`` in a resolved spec: every field but :data:`FREE`, the
     protocol without its :data:`RUN_OPTIONS`, and those arms."""
@@ -184,6 +197,12 @@ class Job:
     def name(self) -> str:
         """``<arm>_seed<seed>``: the name of its rows, checkpoint, model and logs."""
         return f"{self.arm_name}_seed{self.seed}"
+
+    @property
+    def env_kwargs(self) -> dict[str, Any]:
+        """The experiment's ``env_kwargs`` for this job: ``{seed}`` in a string value becomes the job's seed (one
+        env per seed, e.g. ``map: "generated:S:{seed}"``: a seed list is then a list of offices)."""
+        return with_seed(self.experiment.env_kwargs, self.seed)
 
     def identity(self) -> Spec:
         """What its checkpoint must agree on to be resumed: :func:`deciding` of its arm, with its seed, without

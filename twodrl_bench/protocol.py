@@ -110,11 +110,15 @@ def _check_fields(cls: type, raw: dict[str, Any], label: str) -> None:
 
 
 def _transfer(transfer: Any, save_model: bool) -> dict[str, Any]:
-    """``{env, trials, seed}`` of a transfer (seed defaults to the held-out one), checked."""
+    """``{env, trials, seed, env_kwargs}`` of a transfer (seed defaults to the held-out one; ``env_kwargs``, the
+    transfer env's options, to the training env's), checked."""
     key = "protocol.transfer"
-    ok = isinstance(transfer, dict) and {"env", "trials"} <= set(transfer) <= {"env", "trials", "seed"}
-    if not ok or not isinstance(transfer["env"], str):
-        raise ValueError(f"{key} must be {{env: <Gymnasium ID>, trials: <int>, seed: <int>}}, got {transfer!r}")
+    ok = isinstance(transfer, dict) and {"env", "trials"} <= set(transfer) <= {"env", "trials", "seed", "env_kwargs"}
+    if not ok or not isinstance(transfer["env"], str) or not isinstance(transfer.get("env_kwargs", {}), dict):
+        raise ValueError(
+            f"{key} must be {{env: <Gymnasium ID>, trials: <int>, seed: <int>, env_kwargs: <mapping>}}, "
+            f"got {transfer!r}"
+        )
     if positive_int(f"{key}.trials", transfer["trials"]) < PAPER_TRIALS:
         raise ValueError(f"{key}.trials must be at least the paper's {PAPER_TRIALS}, got {transfer['trials']!r}")
     transfer = {**transfer, "seed": transfer.get("seed", TRANSFER_SEED)}
@@ -128,7 +132,8 @@ def _transfer(transfer: Any, save_model: bool) -> dict[str, Any]:
 class TimestepsProtocol:
     """A budget of ``timesteps`` (None: the entry's ``n_timesteps``) trained by rl-zoo3, then ``eval_episodes``
     deterministic episodes; run by :mod:`twodrl_bench.timesteps` (whose docstring describes ``events``,
-    ``entry`` and ``task``). ``checkpoint_every``: timesteps between checkpoints (0: none)."""
+    ``entry``, ``task``, ``check_every``, ``check_episodes`` and ``transfer``). ``checkpoint_every``: timesteps
+    between checkpoints (0: none)."""
 
     timesteps: int | None
     eval_episodes: int
@@ -136,6 +141,9 @@ class TimestepsProtocol:
     entry: str | None = None
     task: str | None = None
     checkpoint_every: int = 20_000
+    check_every: int = 0
+    check_episodes: int = 5
+    transfer: dict[str, Any] | None = None
 
     module: ClassVar[str] = "twodrl_bench.timesteps"
     extendable: ClassVar[tuple[str, ...]] = ()
@@ -152,6 +160,10 @@ class TimestepsProtocol:
             if getattr(self, key) is not None and not isinstance(getattr(self, key), str):
                 raise ValueError(f"protocol.{key} must be a string or null, got {getattr(self, key)!r}")
         positive_int("protocol.checkpoint_every", self.checkpoint_every, zero=True)
+        positive_int("protocol.check_every", self.check_every, zero=True)
+        positive_int("protocol.check_episodes", self.check_episodes)
+        if self.transfer is not None:
+            object.__setattr__(self, "transfer", _transfer(self.transfer, True))
 
     @classmethod
     def from_mapping(cls, raw: dict[str, Any]) -> TimestepsProtocol:
@@ -160,8 +172,12 @@ class TimestepsProtocol:
         return cls(**{"timesteps": None, "eval_episodes": None, **raw})
 
     def as_dict(self) -> dict[str, Any]:
-        """The protocol as a spec holds it (unset optional labels left out)."""
-        return {k: v for k, v in dataclasses.asdict(self).items() if v is not None or k == "timesteps"}
+        """The protocol as a spec holds it (unset optional labels, and checks and transfer where there are none, left
+        out: the specs of earlier runs stay as they were)."""
+        out = {k: v for k, v in dataclasses.asdict(self).items() if v is not None or k == "timesteps"}
+        if not self.check_every:
+            del out["check_every"], out["check_episodes"]
+        return out
 
 
 Protocol = EpochProtocol | TimestepsProtocol

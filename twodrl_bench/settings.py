@@ -7,7 +7,7 @@ import inspect
 from pathlib import Path
 from typing import Any
 
-from sb3_twodrl.hyperparams import hyperparams_path, read_entry
+from sb3_twodrl.hyperparams import env_settings, hyperparams_path, read_entry
 
 ZOO_ONLY = ("n_timesteps", "callback", "normalize", "env_wrapper", "vec_env_wrapper", "frame_stack")
 """Keys of an rl-zoo3 entry that only rl-zoo3 reads: dropped from an epoch protocol's settings."""
@@ -78,6 +78,18 @@ def timesteps_entry(arm: dict[str, Any], env: str, protocol: dict[str, Any]) -> 
         entry["monitor_kwargs"] = monitor_kwargs(protocol["events"])
     check_entry(arm["algo"], entry, protocol)
     return entry
+
+
+def derived(env: str, env_kwargs: dict[str, Any]) -> dict[str, Any]:
+    """What the env ``env`` derives from its options ``env_kwargs`` (:func:`sb3_twodrl.hyperparams.env_settings`:
+    ``hyperparams``, ``env_kwargs``, ``eval_env_kwargs``), empty where it derives nothing (the paper's maps)."""
+    return env_settings(env, env_kwargs) or {}
+
+
+def test_env_kwargs(env: str, env_kwargs: dict[str, Any]) -> dict[str, Any]:
+    """The options of a test env of ``env``: ``env_kwargs`` with the test settings the env derives from them (the
+    map's start and time limit), as ``sb3-twodrl-train`` tests."""
+    return {**env_kwargs, **derived(env, env_kwargs).get("eval_env_kwargs", {})}
 
 
 def monitor_kwargs(events: str) -> str:

@@ -17,6 +17,15 @@ Keys this job reads, beside the fields every spec has:
 - ``protocol.entry`` (optional): the name of the settings entry both arms read (default: the spec's ``env``),
   e.g. rl-zoo3's ``CartPole-v1`` entry for ``CliffWalkingSplit-v1``, which has none of its own.
 - ``protocol.task`` (optional): the rows' ``task`` label (default: the spec's ``env``).
+- ``protocol.check_every`` (optional, 0: none): timesteps between goal checks, each ``protocol.check_episodes``
+  deterministic episodes on a fresh evaluation env (:class:`GoalChecks`); the row's ``checks`` and
+  ``first_goal_at`` (the first check's timestep at which an episode reached the goal, ``info["is_success"]``).
+- ``protocol.transfer`` (optional): ``{env, trials, seed, env_kwargs}``, the final policy's deterministic trials on
+  another env (:func:`twodrl_bench.trials.transfer_columns`, paper section 3.5), columns ``transfer_*``.
+- ``env_kwargs``: the job's (``{seed}`` in a value is its seed). Where the env derives settings from them
+  (:func:`twodrl_bench.settings.derived`: a map other than the paper's), they apply as ``sb3-twodrl-train``
+  applies them: its hyperparameters under the arm's ``override``, its training options under ``env_kwargs``, its
+  test options (the map's start, the time limit) in the evaluation, the checks and the transfer.
 - ``arms.<name>.settings``: ``packaged`` (default), ``rl-zoo3`` or a folder
   (:func:`twodrl_bench.settings.settings_file`); ``arms.<name>.override``: settings over the entry.
 
@@ -45,10 +54,11 @@ from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.monitor import Monitor, ResultsWriter
 
 from twodrl_bench import jobs
-from twodrl_bench.experiment import Arm, Experiment, Job
+from twodrl_bench.experiment import Arm, Experiment, Job, with_seed
 from twodrl_bench.protocol import TimestepsProtocol
-from twodrl_bench.settings import check_entry, timesteps_entry
+from twodrl_bench.settings import check_entry, derived, timesteps_entry
 from twodrl_bench.settings import settings_file as settings_file_of
+from twodrl_bench.trials import transfer_columns
 
 Row = dict[str, Any]
 EVAL_SEED = 10**6
@@ -92,8 +102,13 @@ def training_episodes(run_dir: Path, n_envs: int, events: str | None) -> np.ndar
             steps = 0
             for record in csv.DictReader(f):
                 steps += int(record["l"])
-                rows.append((steps * n_envs, float(record["r"]), float(record[events]) if events else 0.0))
+                rows.append((steps * n_envs, float(record["r"]), _number(record[events]) if events else 0.0))
     return np.array(sorted(rows), dtype=np.float64).reshape(-1, 3)
+
+
+def _number(text: str) -> float:
+    """A ``Monitor`` CSV field as a number (a bool info key is written ``True``/``False``)."""
+    return {"True": 1.0, "False": 0.0}[text] if text in ("True", "False") else float(text)
 
 
 def learning_curve(episodes: np.ndarray, n_timesteps: int, bins: int = CURVE_BINS) -> list[list[float]]:
@@ -109,8 +124,10 @@ def learning_curve(episodes: np.ndarray, n_timesteps: int, bins: int = CURVE_BIN
 
 
 def evaluate(model: Any, env: Any, episodes: int, events: str | None) -> dict[str, float]:
-    """Mean return, length and punishment events of ``episodes`` deterministic episodes, and the share with an event."""
-    results: list[tuple[float, int, float]] = []
+    """Mean return, length and punishment events of ``episodes`` deterministic episodes, the share with an event,
+    the share that reached the goal (``info["is_success"]``, NaN where the env does not say) and the reward per
+    step over all their steps (paper section 3.4.1)."""
+    results: list[tuple[float, int, float, float]] = []
     obs = env.reset()
     total, length = 0.0, 0
     while len(results) < episodes:
@@ -118,16 +135,67 @@ def evaluate(model: Any, env: Any, episodes: int, events: str | None) -> dict[st
         obs, reward, done, info = env.step(action)
         total, length = total + float(reward[0]), length + 1
         if done[0]:
-            results.append((total, length, float(info[0].get(events, 0.0)) if events else 0.0))
+            event = float(info[0].get(events, 0.0)) if events else 0.0
+            results.append((total, length, event, float(info[0].get("is_success", math.nan))))
             total, length = 0.0, 0
-    r, n, e = (np.array(x) for x in zip(*results, strict=True))
+    r, n, e, g = (np.array(x) for x in zip(*results, strict=True))
     return {
         "final_return": float(r.mean()),
         "final_return_std": float(r.std()),
         "final_length": float(n.mean()),
         "final_events": float(e.mean()),
         "final_event_share": float(np.mean(e > 0)),
+        "final_success_share": float(g.mean()),
+        "final_reward_per_step": float(r.sum() / n.sum()),
     }
+
+
+def eval_env(env: str, entry: dict[str, Any], env_kwargs: dict[str, Any], seed: int, stats: Path | None = None) -> Any:
+    """A one-env evaluation VecEnv of ``env`` with ``env_kwargs``, the entry's wrapper, seeded ``seed``; with the
+    run's ``VecNormalize`` statistics ``stats`` (frozen) where the entry normalises."""
+    from rl_zoo3 import utils as zoo_utils
+    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    made = make_vec_env(
+        env, n_envs=1, seed=seed, wrapper_class=zoo_utils.get_wrapper_class(entry), env_kwargs=env_kwargs
+    )
+    if stats is not None and stats.exists():
+        made = VecNormalize.load(str(stats), made)
+        made.training, made.norm_reward = False, False
+    return made
+
+
+class GoalChecks(BaseCallback):
+    """Every ``protocol.check_every`` timesteps, at a rollout's start, ``protocol.check_episodes`` deterministic
+    episodes on a fresh evaluation env seeded ``EVAL_SEED + seed`` (:func:`evaluate`); ``[timestep, share that
+    reached the goal]`` appended to ``state["checks"]`` (checkpointed with the job, so a resumed run checks as an
+    uninterrupted one). Time in checks is not counted in ``wall_s``'s training share; it is in ``wall_s``."""
+
+    def __init__(self, job: Job, state: dict[str, Any], make_env: Any):
+        super().__init__()
+        self.job, self.state, self.make_env = job, state, make_env
+
+    def _on_rollout_start(self) -> None:
+        every = self.job.protocol.check_every
+        checks = self.state.setdefault("checks", [])
+        due = (checks[-1][0] // every + 1) * every if checks else every
+        if not every or self.num_timesteps < due:
+            return
+        env = self.make_env()
+        try:
+            share = evaluate(self.model, env, self.job.protocol.check_episodes, None)["final_success_share"]
+        finally:
+            env.close()
+        checks.append([self.num_timesteps, share])
+
+    def _on_step(self) -> bool:
+        return True
+
+
+def first_goal(checks: list[list[float]]) -> float:
+    """The timestep of the first check at which an episode reached the goal, NaN if none did."""
+    return next((float(t) for t, share in checks if share > 0), math.nan)
 
 
 def _monitors(model: BaseAlgorithm) -> list[Monitor]:
@@ -227,8 +295,6 @@ def run(job: Job) -> list[Row]:
     """
     import torch as th
     from rl_zoo3 import utils as zoo_utils
-    from stable_baselines3.common.env_util import make_vec_env
-    from stable_baselines3.common.vec_env import VecNormalize
 
     from sb3_twodrl.zoo import register_zoo
     from twodrl_bench.algorithms.auto_entropy import AUTO_ENTROPY_ALGOS
@@ -243,26 +309,35 @@ def run(job: Job) -> list[Row]:
     for package in experiment.gym_packages:
         importlib.import_module(package)
     th.set_num_threads(1)
-    env, events = experiment.env, protocol.events
-    entry = copy.deepcopy(arm.hyperparams)
+    env, events, env_kwargs = experiment.env, protocol.events, job.env_kwargs
+    settings = derived(env, env_kwargs)
+    entry = {**copy.deepcopy(arm.hyperparams), **settings.get("hyperparams", {}), **copy.deepcopy(arm.override)}
     check_entry(arm.name, entry, protocol.as_dict())
-    if experiment.env_kwargs:
-        entry["env_kwargs"] = {**(entry.get("env_kwargs") or {}), **experiment.env_kwargs}
+    test_kwargs = {**(entry.get("env_kwargs") or {}), **env_kwargs, **settings.get("eval_env_kwargs", {})}
+    if env_kwargs or settings:
+        entry["env_kwargs"] = {**(entry.get("env_kwargs") or {}), **settings.get("env_kwargs", {}), **env_kwargs}
+    if protocol.check_every and entry.get("normalize"):
+        raise ValueError(f"arm {arm.name!r}: protocol.check_every needs an entry without normalize")
     budget = int(protocol.timesteps or entry["n_timesteps"])
+
+    def make_check_env() -> Any:
+        return eval_env(env, entry, test_kwargs, EVAL_SEED + job.seed)
+
     jobs.progress_path(job.out_dir, job.name).parent.mkdir(parents=True, exist_ok=True)
     resumed = jobs.resume(job)
     if resumed is None:
         model, run_dir = _new_model(job, entry, Path(job.out_dir) / "zoo" / job.name)
-        state = {"run": str(run_dir), "checkpoint_at": 0, "elapsed": 0.0}
+        state = {"run": str(run_dir), "checkpoint_at": 0, "elapsed": 0.0, "checks": []}
         jobs.progress_path(job.out_dir, job.name).write_text("")
-        model.learn(budget, callback=Checkpoints(job, state, budget))
+        model.learn(budget, callback=[GoalChecks(job, state, make_check_env), Checkpoints(job, state, budget)])
     else:
         model, rng, state = resumed
         run_dir = Path(state["run"])
         restore_monitors(model, state.pop("monitors"))
         set_rng_state(rng)
         remaining = budget - model.num_timesteps
-        model.learn(remaining, callback=Checkpoints(job, state, budget), reset_num_timesteps=False)
+        callbacks = [GoalChecks(job, state, make_check_env), Checkpoints(job, state, budget)]
+        model.learn(remaining, callback=callbacks, reset_num_timesteps=False)
     model.env.close()
     model.save(run_dir / env)
     statistics = model.get_vec_normalize_env()
@@ -270,19 +345,17 @@ def run(job: Job) -> list[Row]:
         statistics.save(str(run_dir / env / "vecnormalize.pkl"))
     train_eps = training_episodes(run_dir, int(entry.get("n_envs", 1)), events)
     model = zoo_utils.ALGOS[arm.algo].load(run_dir / f"{env}.zip", device="cpu")
-    eval_env = make_vec_env(
-        env,
-        n_envs=1,
-        seed=EVAL_SEED + job.seed,
-        wrapper_class=zoo_utils.get_wrapper_class(entry),
-        env_kwargs=entry.get("env_kwargs"),
+    final_env = eval_env(env, entry, test_kwargs, EVAL_SEED + job.seed, run_dir / env / "vecnormalize.pkl")
+    final = evaluate(model, final_env, protocol.eval_episodes, events)
+    final_env.close()
+    checks = (
+        {"checks": json.dumps(state["checks"]), "first_goal_at": first_goal(state["checks"])}
+        if protocol.check_every
+        else {}
     )
-    stats = run_dir / env / "vecnormalize.pkl"
-    if stats.exists():
-        eval_env = VecNormalize.load(str(stats), eval_env)
-        eval_env.training, eval_env.norm_reward = False, False
-    final = evaluate(model, eval_env, protocol.eval_episodes, events)
-    eval_env.close()
+    transfer = (
+        transfer_columns(model, env, env_kwargs, with_seed(protocol.transfer, job.seed)) if protocol.transfer else {}
+    )
     found = len(train_eps) > 0
     learned_coefficient = getattr(model, "ent_coef_auto", False)
     course = {"ent_coef_course": json.dumps(model.ent_coef_course)} if learned_coefficient else {}
@@ -301,6 +374,8 @@ def run(job: Job) -> list[Row]:
             "train_event_share": float(np.mean(train_eps[:, 2] > 0)) if found else math.nan,
             "curve": json.dumps(learning_curve(train_eps, budget)),
             **course,
+            **checks,
+            **transfer,
             "wall_s": round(state["elapsed"] + time.perf_counter() - clock, 1),
         }
     ]

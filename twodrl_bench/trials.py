@@ -1,4 +1,5 @@
-"""Test trials: one episode in each sub-env of a test VecEnv, every step one batched ``predict``."""
+"""Test trials: one episode in each sub-env of a test VecEnv, every step one batched ``predict``; a policy's
+transfer trials on another env (paper section 3.5)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,11 @@ from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.vec_env import VecEnv
 
 from sb3_twodrl.callbacks import EpisodeRecord, EpisodeTracker, summarize_episodes
-from twodrl_bench.protocol import ROUTES
+from twodrl_bench.protocol import PAPER_TRIALS, ROUTES, TRANSFER_SEED
+from twodrl_bench.settings import test_env_kwargs
+
+OWN_TRIALS = 10
+"""Trials of a transferred policy in its own training env (did it learn at all?)."""
 
 
 def run_test_trials(model: BaseAlgorithm, test_env: VecEnv, seed: int, deterministic: bool = False) -> dict[str, float]:
@@ -81,4 +86,36 @@ def tally(outcomes: list[str]) -> dict[str, int]:
         "shortcut": outcomes.count("shortcut"),
         "collision": outcomes.count("collision"),
         "timeout": outcomes.count("timeout"),
+    }
+
+
+def _outcomes(model: BaseAlgorithm, env_id: str, n: int, seed: int, env_kwargs: dict[str, Any]) -> list[str]:
+    """Outcomes of ``n`` deterministic trials on ``env_id`` (sub-env ``i`` seeded ``seed + i``), with the test
+    settings the env derives from ``env_kwargs`` (:func:`twodrl_bench.settings.test_env_kwargs`)."""
+    from twodrl_bench.vec_env import make_test_env
+
+    env = make_test_env(env_id, n, env_kwargs=test_env_kwargs(env_id, env_kwargs))
+    try:
+        return trial_outcomes(model, env, seed)
+    finally:
+        env.close()
+
+
+def transfer_columns(
+    model: BaseAlgorithm, env: str, env_kwargs: dict[str, Any], transfer: dict[str, Any]
+) -> dict[str, Any]:
+    """Paper section 3.5: ``transfer["trials"]`` deterministic trials of ``model`` on ``transfer["env"]`` (the
+    first :data:`PAPER_TRIALS` are the paper's) and :data:`OWN_TRIALS` on its training env, counted by outcome;
+    ``env_kwargs`` go to both envs (``observe_odometry: False``: sensors only) unless ``transfer["env_kwargs"]``
+    gives the transfer env its own."""
+    seed = transfer.get("seed", TRANSFER_SEED)
+    own = tally(_outcomes(model, env, OWN_TRIALS, seed + 10**4, env_kwargs))
+    outcomes = _outcomes(model, transfer["env"], transfer["trials"], seed, transfer.get("env_kwargs", env_kwargs))
+    target = tally(outcomes)
+    return {
+        "transfer_env": transfer["env"],
+        "transfer_trials": transfer["trials"],
+        "transfer_paper_successes": tally(outcomes[:PAPER_TRIALS])["success"],
+        **{f"transfer_{key}": value for key, value in target.items()},
+        "own_env_success": own["success"] / OWN_TRIALS,
     }

@@ -9,6 +9,7 @@ layout (``observation="cell"`` included) are those of ``NomadOffice-v0``.
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +20,34 @@ from twodrl_envs.nomad import sensors
 from twodrl_envs.nomad.batched import BatchedNomadOffice
 from twodrl_envs.nomad.core import OfficeCore, Robot, counter_word, office_core
 from twodrl_envs.nomad.office import NomadOfficeEnv
+
+
+RECORDED = "recorded:"
+"""Prefix of ``database="recorded:K:SEED"``: the stand-in robot's recording of the env's map, made on demand."""
+
+
+def recorded(core: OfficeCore, database: str) -> SensorDatabase:
+    """The database ``"recorded:K:SEED"`` names: ``K`` readings per cell recorded in ``core``'s map by the stand-in
+    robot of ``NomadOfficeReal-v0`` driving by dead reckoning, with ``seed``
+    (:func:`~twodrl_envs.analysis.recording.record_database`, as ``sb3-twodrl-record-database --k K --seed SEED``
+    records it); made once per process and map.
+
+    :raises ValueError: naming ``database``, if K or SEED is not an int (K >= 1, SEED >= 0)
+    """
+    k, _, seed = database.removeprefix(RECORDED).partition(":")
+    if not (k.isdigit() and seed.isdigit() and int(k) >= 1):
+        raise ValueError(f"database must be 'recorded:K:SEED' with ints K >= 1 and SEED >= 0, got {database!r}")
+    db = _recorded(core.office.source, int(k), int(seed))
+    db.check_map(core)  # a map file edited since this process recorded it
+    return db
+
+
+@functools.lru_cache(maxsize=4)
+def _recorded(source: str, k: int, seed: int) -> SensorDatabase:
+    from twodrl_envs.analysis.recording import record_database
+    from twodrl_envs.nomad.realistic import RealisticModel
+
+    return record_database(k, map=source, model=RealisticModel(), seed=seed)
 
 
 class ReplayRobot(Robot):
@@ -34,6 +63,8 @@ class ReplayRobot(Robot):
         if isinstance(database, SensorDatabase):
             database.check_map(core)
             db = database
+        elif isinstance(database, str) and database.startswith(RECORDED):
+            db = recorded(core, database)
         else:
             db = load_database(database, core)
         self.database = db
@@ -63,8 +94,9 @@ class NomadOfficeMemorableEnv(NomadOfficeEnv):
     """The Nomad office task trained from recorded readings (paper section 3.1, MEMORABLE).
 
     ``database`` is a file written by :func:`twodrl_envs.memorable.database.save_database`, a loaded
-    :class:`~twodrl_envs.memorable.database.SensorDatabase`, or ``None`` for the shipped one (realistic
-    sensor model, K = 8); it must have been recorded in ``map``. Motion is on the lattice, so
+    :class:`~twodrl_envs.memorable.database.SensorDatabase`, ``None`` for the shipped one (realistic
+    sensor model, K = 8), or ``"recorded:K:SEED"`` to record one in ``map`` now (:func:`recorded`); it must
+    have been recorded in ``map``. Motion is on the lattice, so
     ``options["position"]`` must be a recorded cell. The robot is a :class:`ReplayRobot` (``env.robot``).
     """
 

@@ -3,7 +3,7 @@
 A transfer spec is an epoch protocol with ``transfer: {env, trials, seed}``: each (arm, seed) trains on the
 spec's env, then its final deterministic policy runs ``trials`` trials on ``env`` (default
 ``NomadOfficeReal-v0``, the stand-in robot) with the held-out seed, and 10 in its own training env
-(:func:`twodrl_bench.epochs.transfer_columns`; the counts are in the last epoch's row). The spec's
+(:func:`twodrl_bench.trials.transfer_columns`; the counts are in the last epoch's row). The spec's
 ``env_kwargs`` go to both envs (``observe_odometry: false``: sensors only). One table row per (arm, part):
 the paper's 10 trials per seed, success, shortcut and collision rates over all trials as means over
 seeds with 95% t-intervals, the pooled successes with a Wilson interval, and the success rate of the
