@@ -178,23 +178,55 @@ def transfer(parts: dict[str, Part], rules: dict[str, Any]) -> tuple[list[str], 
     return [*lines, "", *verdicts]
 
 
+def figure(sets: list[tuple[str, Pairs]], rules: dict[str, Any], path: Path) -> bool:
+    """Per set, each map's collisions per training episode, claim against reference (one point per map, the diagonal
+    for equal): ``path``, if matplotlib (extra ``plots``) is there."""
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return False
+    key, claim, reference = rules["collisions"], rules["claim"], rules["reference"]
+    fig, axes = plt.subplots(1, len(sets), figsize=(4.2 * len(sets), 4.2), squeeze=False)
+    for ax, (label, found) in zip(axes[0], sets, strict=True):
+        x = [float(p[1][key]) for p in found.values()]
+        y = [float(p[0][key]) for p in found.values()]
+        top = max([*x, *y, 0.05]) * 1.05
+        ax.plot([0, top], [0, top], color="grey", linewidth=0.8)
+        ax.scatter(x, y, s=14, color="tab:red")
+        ax.set(xlim=(0, top), ylim=(0, top), title=label)
+        ax.set(
+            xlabel=f"{reference}: collisions per training episode", ylabel=f"{claim}: collisions per training episode"
+        )
+    fig.tight_layout()
+    fig.savefig(path, dpi=100, metadata={"Software": None})
+    plt.close(fig)
+    return True
+
+
 def report(parts: list[Part], out: Path) -> str:
     """Write ``table.md`` under ``out``: the verdicts; per set of comparison parts (a spec's ``rules.parts``: the
-    registered set, the replication set) R1-R4 over its pairs, by part, every map; the transfer."""
-    by_name = {p.part: p for p in parts}
+    registered set, the replication set) R1-R4 over its pairs, by part, every map; the transfer. Parts without rows
+    yet are left out."""
+    by_name = {p.part: p for p in parts if not p.rows.empty}
     sets: dict[tuple[str, ...], list[Part]] = {}
-    for part in parts:
+    for part in by_name.values():
         if "learned_at" in part.spec["rules"]:
             sets.setdefault(tuple(part.spec["rules"]["parts"]), []).append(part)
-    links = ", ".join(f"[{p.part}/rows.csv]({p.part}/rows.csv)" for p in parts)
+    for names, members in sets.items():
+        members.sort(key=lambda p: names.index(p.part))
+    links = ", ".join(f"[{p.part}/rows.csv]({p.part}/rows.csv)" for p in by_name.values())
     head = ["# 2D-RL across offices", "", f"Rules: [preregistration.md](preregistration.md). Rows: {links}.", ""]
-    summary, body = ["## Verdicts", ""], []
+    summary, body, drawn = ["## Verdicts", ""], [], []
     for members in sets.values():
         rules = members[0].spec["rules"]
         claim, reference = rules["claim"], rules["reference"]
         found = pairs(members, claim, reference)
         lines, verdicts = comparison(found, rules)
         label = f"{len(found)} offices ({', '.join(p.part for p in members)})"
+        drawn.append((label, found))
         summary += [f"- {label}: " + "; ".join(f"{rule} {text}" for rule, text in verdicts.items()) + "."]
         body += ["", f"## {claim} against {reference}: {label}", "", *lines]
         for part in members:
@@ -210,12 +242,14 @@ def report(parts: list[Part], out: Path) -> str:
             "",
             *every_map(members, claim, reference, rules["learned_at"], rules["collisions"]),
         ]
-    transfers = [p for p in parts if "database" in p.spec["rules"]]
+    out.mkdir(parents=True, exist_ok=True)
+    if drawn and figure(drawn, rules, out / "fig_collisions.png"):
+        head += ["![collisions per training episode](fig_collisions.png)", ""]
+    transfers = [p for p in by_name.values() if "database" in p.spec["rules"]]
     if transfers:
         lines, verdicts = transfer(by_name, transfers[0].spec["rules"])
         summary += verdicts
         body += ["", "## Transfer to the stand-in robot (NomadOfficeReal-v0)", "", *lines]
     text = "\n".join([*head, *summary, *body]) + "\n"
-    out.mkdir(parents=True, exist_ok=True)
     (out / "table.md").write_text(text)
     return text
