@@ -42,14 +42,15 @@ def pairs(parts: list[Part], claim: str, reference: str) -> Pairs:
     return out
 
 
-def interval(values: list[float], digits: int = 3) -> tuple[str, float, float]:
-    """``mean [low, high]`` with its 95% t-interval, and the bounds (NaN with fewer than 2 values)."""
+def interval(values: list[float], digits: int = 3, share: bool = False) -> tuple[str, float, float]:
+    """``mean [low, high]`` with its 95% t-interval, and the bounds (NaN with fewer than 2 values); a ``share``'s
+    interval is clipped to [0, 1]."""
     mean, half, n = mean_ci(values)
     if n == 0:
         return "-", math.nan, math.nan
     if n == 1 or not np.isfinite(half):
         return f"{mean:.{digits}f} (n = 1)", math.nan, math.nan
-    low, high = mean - half, mean + half
+    low, high = (max(mean - half, 0.0), min(mean + half, 1.0)) if share else (mean - half, mean + half)
     return f"{mean:.{digits}f} [{low:.{digits}f}, {high:.{digits}f}]", low, high
 
 
@@ -151,23 +152,28 @@ def transfer(parts: dict[str, Part], rules: dict[str, Any]) -> tuple[list[str], 
     paper = rules["paper_successes"]
     trials = database.spec["protocol"]["transfer"]["trials"]
     lines = [
-        f"| arm | trained on | maps | goal share on the stand-in robot, mean over maps | maps with >= {paper} of the "
+        f"| arm | trained on | maps | goal share on the stand-in robot, mean over maps (t-interval within [0, 1]) | "
+        f"maps with >= {paper} of the "
         f"first {PAPER_TRIALS} | maps with 0 of {trials} | goal share in its training env |",
         "| --- | --- | --- | --- | --- | --- | --- |",
     ]
-    verdicts = []
+    verdicts: list[str] = []
+    by_map: dict[int, dict[tuple[str, str], str]] = {}
     for arm in database.spec["arms"]:
         shares = {}
         for label, part in (("database", database), ("simulator", simulator)):
             rows = _rows(part, arm)
             share = {s: float(r["transfer_success"]) / trials for s, r in rows.items()}
             shares[label] = share
+            mean = interval(list(share.values()), 2, True)[0]
             lines.append(
-                f"| {arm} | {label} ({part.spec['env']}) | {len(rows)} | {interval(list(share.values()), 2)[0]} | "
+                f"| {arm} | {label} ({part.spec['env']}) | {len(rows)} | {mean} | "
                 f"{sum(int(r['transfer_paper_successes']) >= paper for r in rows.values())} | "
                 f"{sum(int(r['transfer_success']) == 0 for r in rows.values())} | "
-                f"{interval([float(r['final_success_share']) for r in rows.values()], 2)[0]} |"
+                f"{interval([float(r['final_success_share']) for r in rows.values()], 2, True)[0]} |"
             )
+            for seed, r in rows.items():
+                by_map.setdefault(seed, {})[(arm, label)] = f"{int(r['transfer_success'])}"
         common = sorted(set(shares["database"]) & set(shares["simulator"]))
         diffs = [shares["database"][s] - shares["simulator"][s] for s in common]
         text, low, high = interval(diffs, 2)
@@ -175,7 +181,17 @@ def transfer(parts: dict[str, Part], rules: dict[str, Any]) -> tuple[list[str], 
         verdicts.append(
             f"- T1, {arm}: database minus simulator goal share, paired over {len(common)} maps: {text}: {verdict}."
         )
-    return [*lines, "", *verdicts]
+    columns = [(arm, label) for arm in database.spec["arms"] for label in ("database", "simulator")]
+    lines += ["", f"Goals in the {trials} trials on the stand-in robot, every map:", ""]
+    lines += [
+        "| map | " + " | ".join(f"{arm}, {label}" for arm, label in columns) + " |",
+        "|" + " --- |" * (1 + len(columns)),
+    ]
+    place = database.spec["env_kwargs"]["map"]
+    for seed in sorted(by_map):
+        cells = [by_map[seed].get(column, "-") for column in columns]
+        lines.append(f"| {place.replace('{seed}', str(seed))} | " + " | ".join(cells) + " |")
+    return lines, verdicts
 
 
 def figure(sets: list[tuple[str, Pairs]], rules: dict[str, Any], path: Path) -> bool:
