@@ -21,7 +21,6 @@ from twodrl_envs.nomad.batched import BatchedNomadOffice
 from twodrl_envs.nomad.core import OfficeCore, Robot, counter_word, office_core
 from twodrl_envs.nomad.office import NomadOfficeEnv
 
-
 RECORDED = "recorded:"
 """Prefix of ``database="recorded:K:SEED"``: the stand-in robot's recording of the env's map, made on demand."""
 
