@@ -85,7 +85,9 @@ def comparison(found: Pairs, rules: dict[str, Any]) -> tuple[list[str], dict[str
     if high_c < 0:
         guarded = low_l > rules["learned_guard"]
         verdicts["R1"] = (
-            f"holds: {claim} collides less" if guarded else "not shown: fewer collisions but fewer maps learned"
+            f"holds: {claim} collides less"
+            if guarded
+            else "not shown: fewer collisions, but the learned interval reaches below the guard"
         )
     else:
         verdicts["R1"] = f"{claim} collides more" if low_c > 0 else "no difference shown"
