@@ -170,7 +170,7 @@ class GoalChecks(BaseCallback):
     """Every ``protocol.check_every`` timesteps, at a rollout's start, ``protocol.check_episodes`` deterministic
     episodes on a fresh evaluation env seeded ``EVAL_SEED + seed`` (:func:`evaluate`); ``[timestep, share that
     reached the goal]`` appended to ``state["checks"]`` (checkpointed with the job, so a resumed run checks as an
-    uninterrupted one). Time in checks is not counted in ``wall_s``'s training share; it is in ``wall_s``."""
+    uninterrupted one). The checks' time is part of the row's ``wall_s``."""
 
     def __init__(self, job: Job, state: dict[str, Any], make_env: Any):
         super().__init__()
