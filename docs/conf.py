@@ -9,6 +9,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "envs"))  # the env package's folder, envs/twodrl_envs/
 sys.path.insert(0, str(ROOT / "docs" / "_ext"))
 
 project = "sb3-twodrl"

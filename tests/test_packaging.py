@@ -10,11 +10,10 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def test_every_package_folder_is_listed_under_its_import_name() -> None:
     config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
-    folders = {value: key for key, value in config["package-dir"].items()}
+    assert config["package-dir"] == {"twodrl_envs": "envs/twodrl_envs"}  # the folder has the import name
     found = set()
-    for top in ("sb3_twodrl", "twodrl_bench", "envs"):
-        for init in (ROOT / top).rglob("__init__.py"):
-            parts = init.parent.relative_to(ROOT).parts
-            found.add(".".join((folders.get(parts[0], parts[0]), *parts[1:])))
+    for top in (ROOT / "sb3_twodrl", ROOT / "twodrl_bench", ROOT / "envs" / "twodrl_envs"):
+        for init in top.rglob("__init__.py"):
+            found.add(".".join(init.parent.relative_to(top.parent).parts))
     assert set(config["packages"]) == found
-    assert "envs" not in {name.split(".")[0] for name in config["packages"]}
+    assert not (ROOT / "envs" / "__init__.py").exists()  # envs/ is a folder of the layout, not a package
