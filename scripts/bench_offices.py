@@ -24,12 +24,13 @@ from stable_baselines3 import A2C
 from stable_baselines3.common.callbacks import BaseCallback
 
 import twodrl_envs  # noqa: F401  (registers the IDs)
-from sb3_twodrl import TwoDimA2C, hyperparams
+from sb3_twodrl import TwoDimA2C
 from twodrl_bench.intervals import wilson
 from twodrl_bench.vec_env import make_test_env, make_train_env
 from twodrl_envs.nomad.core import office_core
 from twodrl_envs.nomad.office import NomadOfficeEnv
 from twodrl_envs.nomad.settings import map_settings
+from twodrl_zoo import hyperparams
 
 ALGOS = {"twoda2c": TwoDimA2C, "a2c": A2C}
 ENV = "NomadOffice-v0"

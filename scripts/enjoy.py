@@ -2,7 +2,7 @@
 """``sb3-twodrl-enjoy`` from a checkout: ``python scripts/enjoy.py --algo twoda2c --env NomadOffice-v0``.
 
 rl-zoo3's enjoy with TwoDimA2C and TwoDimPPO registered; ``--record -o videos`` records a video
-(:mod:`sb3_twodrl.cli`).
+(:mod:`twodrl_zoo.cli`).
 """
 
 import sys
@@ -10,7 +10,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a checkout without installing
 
-from sb3_twodrl.cli import enjoy
+from twodrl_zoo.cli import enjoy
 
 if __name__ == "__main__":
     enjoy()

@@ -1,7 +1,7 @@
 #!/usr/bin/env python
 """``sb3-twodrl-train`` from a checkout: ``python scripts/train.py --algo twoda2c --env NomadOffice-v0``.
 
-rl-zoo3's train with TwoDimA2C and TwoDimPPO registered and the packaged hyperparameters (:mod:`sb3_twodrl.cli`).
+rl-zoo3's train with TwoDimA2C and TwoDimPPO registered and the packaged hyperparameters (:mod:`twodrl_zoo.cli`).
 """
 
 import sys
@@ -9,7 +9,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a checkout without installing
 
-from sb3_twodrl.cli import train
+from twodrl_zoo.cli import train
 
 if __name__ == "__main__":
     train()

@@ -12,7 +12,7 @@ from stable_baselines3 import A2C
 
 import twodrl_envs  # noqa: F401
 from sb3_twodrl import TwoDimA2C
-from sb3_twodrl.export import export_onnx, export_policy, main
+from twodrl_zoo.export import export_onnx, export_policy, main
 
 
 @pytest.mark.parametrize("algo", [TwoDimA2C, A2C])
@@ -153,8 +153,8 @@ def test_the_exported_policy_takes_the_robots_raw_readings(tmp_path, fmt):
     from stable_baselines3.common.env_util import make_vec_env
 
     from sb3_twodrl import TwoDimA2C
-    from sb3_twodrl.export import deploy_input, export_onnx, export_policy
     from twodrl_envs.nomad.core import office_core
+    from twodrl_zoo.export import deploy_input, export_onnx, export_policy
 
     if fmt == "onnx":
         pytest.importorskip("onnxruntime")

@@ -16,9 +16,9 @@ pytest.importorskip("rl_zoo3")
 pytest.importorskip("scipy")
 
 from sb3_twodrl import TwoDimA2C
-from sb3_twodrl.hyperparams import hyperparams_path, read_entry
 from twodrl_bench.reports.non_regression import report
 from twodrl_bench.timesteps import resolve_arm, run_job
+from twodrl_zoo.hyperparams import hyperparams_path, read_entry
 
 ENVS = ("CartPole-v1", "Acrobot-v1", "Pendulum-v1")
 RESULTS = Path(__file__).parents[1] / "results" / "non_regression"

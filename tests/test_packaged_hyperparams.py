@@ -9,15 +9,16 @@ import pytest
 
 import sb3_twodrl
 import twodrl_envs  # noqa: F401  (registers the Nomad office ids)
-from sb3_twodrl.hyperparams import PACKAGED, hyperparams_path, load, read_entry
+import twodrl_zoo
 from twodrl_bench import Experiment, load_spec
 from twodrl_bench.settings import epoch_entry
+from twodrl_zoo.hyperparams import PACKAGED, hyperparams_path, load, read_entry
 
 
 @pytest.mark.parametrize("algo", PACKAGED)
 def test_files_are_found_in_the_package(algo: str) -> None:
     path = hyperparams_path(algo)
-    assert path.is_file() and path.parent == Path(sb3_twodrl.__file__).parent / "hyperparams"
+    assert path.is_file() and path.parent == Path(twodrl_zoo.__file__).parent / "hyperparams"
     assert read_entry(path, "NomadOffice-v0")["gamma"] == 0.9
 
 
@@ -55,7 +56,7 @@ def test_load_gives_what_rl_zoo3_passes_to_the_constructor(algo: str, env_id: st
     pytest.importorskip("rl_zoo3")
     from rl_zoo3.exp_manager import ExperimentManager
 
-    from sb3_twodrl.zoo import register_zoo
+    from twodrl_zoo.zoo import register_zoo
 
     register_zoo()
     manager = ExperimentManager(argparse.Namespace(), algo, env_id, str(tmp_path), config=str(hyperparams_path(algo)))

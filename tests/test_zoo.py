@@ -16,9 +16,9 @@ import yaml
 
 import tests.toy_nav  # noqa: F401  (registers ToyNav-v0)
 import twodrl_envs  # noqa: F401  (registers the Nomad office ids)
-from sb3_twodrl import cli, export, zoo
-from sb3_twodrl.hyperparams import hyperparams_path
-from sb3_twodrl.zoo import (
+from twodrl_zoo import cli, export, zoo
+from twodrl_zoo.hyperparams import hyperparams_path
+from twodrl_zoo.zoo import (
     GYM_PACKAGES_GROUP,
     ZOO_ALGOS,
     ZOO_SAMPLERS,
@@ -35,7 +35,7 @@ ALGOS = ["a2c", "twoda2c", "ppo", "twodppo"]
 
 
 def run_script(name: str, argv: list[str], monkeypatch) -> None:
-    """``scripts/<name>`` as run from a checkout (it calls :mod:`sb3_twodrl.cli`, the installed commands)."""
+    """``scripts/<name>`` as run from a checkout (it calls :mod:`twodrl_zoo.cli`, the installed commands)."""
     monkeypatch.setattr(sys, "argv", [name, *argv])
     runpy.run_path(str(ROOT / "scripts" / name), run_name="__main__")
 
@@ -233,7 +233,7 @@ def test_enjoy_without_pygame_replays_headless_and_names_the_extra(tmp_path, mon
     run_script("train.py", [*argv, "--device", "cpu"], monkeypatch)
     code = (
         "import sys; sys.modules['pygame'] = None\n"  # import pygame raises ImportError, as when not installed
-        "from sb3_twodrl import cli; cli.enjoy(['--algo', 'twoda2c', '--env', 'NomadOffice-v0', '-n', '20'])"
+        "from twodrl_zoo import cli; cli.enjoy(['--algo', 'twoda2c', '--env', 'NomadOffice-v0', '-n', '20'])"
     )
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300)
@@ -248,9 +248,9 @@ def test_enjoy_without_pygame_replays_headless_and_names_the_extra(tmp_path, mon
 def test_installed_commands_point_at_the_cli() -> None:
     pyproject = (ROOT / "pyproject.toml").read_text()
     for line in (
-        'sb3-twodrl-train = "sb3_twodrl.cli:train"',
-        'sb3-twodrl-enjoy = "sb3_twodrl.cli:enjoy"',
-        'sb3-twodrl-export = "sb3_twodrl.export:main"',
+        'sb3-twodrl-train = "twodrl_zoo.cli:train"',
+        'sb3-twodrl-enjoy = "twodrl_zoo.cli:enjoy"',
+        'sb3-twodrl-export = "twodrl_zoo.export:main"',
     ):
         assert line in pyproject.splitlines()
 
@@ -271,9 +271,9 @@ def test_installed_commands_point_at_the_cli() -> None:
     ],
 )
 def test_train_defaults_to_the_packaged_file_and_one_thread(argv, added, monkeypatch):
-    import sb3_twodrl.zoo
+    import twodrl_zoo.zoo
 
     seen: list[list[str]] = []
-    monkeypatch.setattr(sb3_twodrl.zoo, "run_zoo_entry", lambda prog, argv, entry: seen.append(argv))
+    monkeypatch.setattr(twodrl_zoo.zoo, "run_zoo_entry", lambda prog, argv, entry: seen.append(argv))
     cli.train(argv)
     assert seen == [[*argv, *added]]

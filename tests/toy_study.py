@@ -7,7 +7,7 @@ from typing import Any
 
 import yaml
 
-from sb3_twodrl.hyperparams import hyperparams_path, read_entry
+from twodrl_zoo.hyperparams import hyperparams_path, read_entry
 
 ENV = "ToyNavRandom-v0"
 ALGOS = ("twoda2c", "a2c")

@@ -75,7 +75,7 @@ BENCH_MODULES = ("pandas", "scipy", "matplotlib")
 
 
 def main(argv: list[str] | None = None) -> None:
-    from sb3_twodrl.cli import require_extra
+    from twodrl_zoo.cli import require_extra
 
     args = parse_args(argv)
     require_extra("bench", *BENCH_MODULES)

@@ -36,7 +36,6 @@ from stable_baselines3.common.utils import set_random_seed
 from stable_baselines3.common.vec_env import VecEnv
 
 from sb3_twodrl.callbacks import NavigationMetricsCallback
-from sb3_twodrl.hyperparams import evaluate
 from twodrl_bench import jobs
 from twodrl_bench.algorithms import algo_class
 from twodrl_bench.checkpoint import set_rng_state
@@ -44,6 +43,7 @@ from twodrl_bench.experiment import Job, with_seed
 from twodrl_bench.protocol import LEARNING, METRICS, ROUTES, trial_seed
 from twodrl_bench.trials import run_test_trials, transfer_columns
 from twodrl_bench.vec_env import make_test_env, make_train_env
+from twodrl_zoo.hyperparams import evaluate
 
 Row = dict[str, Any]
 

@@ -7,7 +7,7 @@ import inspect
 from pathlib import Path
 from typing import Any
 
-from sb3_twodrl.hyperparams import env_settings, hyperparams_path, read_entry
+from twodrl_zoo.hyperparams import env_settings, hyperparams_path, read_entry
 
 ZOO_ONLY = ("n_timesteps", "callback", "normalize", "env_wrapper", "vec_env_wrapper", "frame_stack")
 """Keys of an rl-zoo3 entry that only rl-zoo3 reads: dropped from an epoch protocol's settings."""
@@ -26,7 +26,7 @@ def settings_algo(algo: str) -> str:
 
 
 def settings_file(algo: str, settings: str = "packaged") -> Path:
-    """The rl-zoo3 hyperparameter file an arm of ``algo`` reads: ``packaged`` (:mod:`sb3_twodrl.hyperparams`),
+    """The rl-zoo3 hyperparameter file an arm of ``algo`` reads: ``packaged`` (:mod:`twodrl_zoo.hyperparams`),
     ``rl-zoo3`` (rl-zoo3's own, of the stock algorithm for a 2D-RL one: :data:`STOCK`) or a folder of ``<algo>.yml``.
 
     :raises ValueError: if the file does not exist
@@ -81,7 +81,7 @@ def timesteps_entry(arm: dict[str, Any], env: str, protocol: dict[str, Any]) -> 
 
 
 def derived(env: str, env_kwargs: dict[str, Any]) -> dict[str, Any]:
-    """What the env ``env`` derives from its options ``env_kwargs`` (:func:`sb3_twodrl.hyperparams.env_settings`:
+    """What the env ``env`` derives from its options ``env_kwargs`` (:func:`twodrl_zoo.hyperparams.env_settings`:
     ``hyperparams``, ``env_kwargs``, ``eval_env_kwargs``), empty where it derives nothing (the paper's maps)."""
     return env_settings(env, env_kwargs) or {}
 

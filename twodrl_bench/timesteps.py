@@ -296,9 +296,9 @@ def run(job: Job) -> list[Row]:
     import torch as th
     from rl_zoo3 import utils as zoo_utils
 
-    from sb3_twodrl.zoo import register_zoo
     from twodrl_bench.algorithms.auto_entropy import AUTO_ENTROPY_ALGOS
     from twodrl_bench.checkpoint import set_rng_state
+    from twodrl_zoo.zoo import register_zoo
 
     clock = time.perf_counter()
     experiment, protocol, arm = job.experiment, job.protocol, job.arm

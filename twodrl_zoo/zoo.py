@@ -1,6 +1,6 @@
 """rl-zoo3 integration: register TwoDimA2C as ``twoda2c`` and TwoDimPPO as ``twodppo``, with Optuna samplers.
 
->>> from sb3_twodrl.zoo import register_zoo
+>>> from twodrl_zoo.zoo import register_zoo
 >>> register_zoo()  # then rl_zoo3.train.train() / rl_zoo3.enjoy.enjoy() accept --algo twoda2c / twodppo
 
 rl-zoo3 looks algorithms up in ``rl_zoo3.utils.ALGOS`` and samplers in
@@ -9,7 +9,7 @@ stored Optuna trial back into constructor arguments, for ``--trial-id``). Those 
 dicts that the training and enjoy scripts import by reference, so registering means adding keys to
 them, before rl-zoo3 parses its command line (its ``--algo`` choices are taken from ``ALGOS``).
 
-Requires the ``zoo`` extra; the installed commands ``sb3-twodrl-train`` and ``sb3-twodrl-enjoy`` (:mod:`sb3_twodrl.cli`)
+Requires the ``zoo`` extra; the installed commands ``sb3-twodrl-train`` and ``sb3-twodrl-enjoy`` (:mod:`twodrl_zoo.cli`)
 call :func:`register_zoo`.
 """
 
@@ -21,8 +21,8 @@ from importlib.metadata import entry_points
 from typing import Any
 
 from sb3_twodrl.a2c import TwoDimA2C
-from sb3_twodrl.hyperparams import PACKAGED, env_settings, hyperparams_path
 from sb3_twodrl.ppo import TwoDimPPO
+from twodrl_zoo.hyperparams import PACKAGED, env_settings, hyperparams_path
 
 __all__ = [
     "GYM_PACKAGES_GROUP",
@@ -153,12 +153,12 @@ def import_gym_packages() -> None:
 
 
 def prepare_zoo_argv(argv: list[str], packaged_conf: bool = False) -> list[str]:
-    """Make rl-zoo3's command line ready for this project (used by :mod:`sb3_twodrl.cli`).
+    """Make rl-zoo3's command line ready for this project (used by :mod:`twodrl_zoo.cli`).
 
     Registers ``twoda2c`` and ``twodppo`` (:func:`register_zoo`), imports the env packages of the
     :data:`GYM_PACKAGES_GROUP` entry points (:func:`import_gym_packages`; ``--gym-packages`` adds others), and, when
     ``packaged_conf`` and no ``-conf/--conf-file`` is given, adds ``--conf-file`` with the packaged ``<algo>.yml``
-    (:func:`~sb3_twodrl.hyperparams.hyperparams_path`) of the algos in :data:`~sb3_twodrl.hyperparams.PACKAGED`;
+    (:func:`~twodrl_zoo.hyperparams.hyperparams_path`) of the algos in :data:`~twodrl_zoo.hyperparams.PACKAGED`;
     the other algos keep rl-zoo3's own files.
     """
     register_zoo()
@@ -199,7 +199,7 @@ def _dict_options(argv: list[str]) -> tuple[list[str], dict[str, dict[str, Any]]
 def apply_env_settings(argv: list[str]) -> tuple[list[str], dict[str, Any] | None]:
     """rl-zoo3 ``train`` arguments with the settings the env derives from its ``--env-kwargs``, and those settings.
 
-    The settings are the env class's ``training_settings`` (:func:`~sb3_twodrl.hyperparams.env_settings`); None
+    The settings are the env class's ``training_settings`` (:func:`~twodrl_zoo.hyperparams.env_settings`); None
     leaves the command line unchanged.
 
     Derived hyperparameters are added to ``--hyperparams``, training env options to ``--env-kwargs`` and test env

@@ -179,8 +179,8 @@ def deploy_input(env_id: str, env_kwargs: dict[str, Any] | None = None) -> nn.Mo
     """
     from gymnasium.error import Error
 
-    from sb3_twodrl.hyperparams import env_class
-    from sb3_twodrl.zoo import import_gym_packages
+    from twodrl_zoo.hyperparams import env_class
+    from twodrl_zoo.zoo import import_gym_packages
 
     import_gym_packages()  # the env packages that register IDs (entry-point group)
     try:
@@ -211,7 +211,7 @@ def _literal_options(pairs: list[str]) -> dict[str, Any]:
 def main(argv: list[str] | None = None) -> None:
     """``sb3-twodrl-export``: load a saved model and write its deterministic actor."""
     from sb3_twodrl import ALGOS
-    from sb3_twodrl.cli import require_extra
+    from twodrl_zoo.cli import require_extra
 
     parser = argparse.ArgumentParser(
         prog="sb3-twodrl-export", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter

@@ -1,11 +1,11 @@
 """The installed zoo commands: ``sb3-twodrl-train`` and ``sb3-twodrl-enjoy`` (rl-zoo3's ``train`` and ``enjoy``).
 
-Both register ``twoda2c`` and ``twodppo`` (:func:`sb3_twodrl.zoo.register_zoo`) and import the installed env packages
-that list themselves under the ``sb3_twodrl.gym_packages`` entry points (:func:`sb3_twodrl.zoo.import_gym_packages`),
+Both register ``twoda2c`` and ``twodppo`` (:func:`twodrl_zoo.zoo.register_zoo`) and import the installed env packages
+that list themselves under the ``sb3_twodrl.gym_packages`` entry points (:func:`twodrl_zoo.zoo.import_gym_packages`),
 so their env IDs work from any folder without ``--gym-packages``; every rl-zoo3 option is kept, and
 ``--num-threads`` defaults to 1 (rl-zoo3's default keeps torch's thread count: several times slower for these small
 networks on a shared machine, docs/zoo.md).
-``sb3-twodrl-train`` reads the packaged ``<algo>.yml`` (:mod:`sb3_twodrl.hyperparams`) for a2c, ppo, twoda2c and
+``sb3-twodrl-train`` reads the packaged ``<algo>.yml`` (:mod:`twodrl_zoo.hyperparams`) for a2c, ppo, twoda2c and
 twodppo unless ``-conf/--conf-file`` names another file. A command whose extra is missing exits, before any work,
 with the ``pip install`` line that adds it (:func:`require_extra`). ``sb3-twodrl-enjoy`` without ``pygame`` (the
 ``render`` extra: gymnasium's window) replays headless, as with ``--no-render``, and says so.
@@ -46,7 +46,7 @@ def train(argv: list[str] | None = None) -> None:
     require_extra("zoo", *ZOO_MODULES)
     from rl_zoo3.train import train as zoo_train
 
-    from sb3_twodrl.zoo import _has_option, apply_env_settings, prepare_zoo_argv, run_zoo_entry
+    from twodrl_zoo.zoo import _has_option, apply_env_settings, prepare_zoo_argv, run_zoo_entry
 
     argv = prepare_zoo_argv(sys.argv[1:] if argv is None else argv, packaged_conf=True)
     argv, settings = apply_env_settings(argv)
@@ -72,7 +72,7 @@ def report_goal_rate(argv: list[str], episodes: int = 20) -> float | None:
     import numpy as np
     from rl_zoo3.utils import ALGOS, create_test_env, get_latest_run_id, get_saved_hyperparams
 
-    from sb3_twodrl.zoo import _dict_options, _option_value
+    from twodrl_zoo.zoo import _dict_options, _option_value
 
     algo, env_id = _option_value(argv, "--algo") or "ppo", _option_value(argv, "--env") or "CartPole-v1"
     folder = _option_value(argv, "-f", "--log-folder") or "logs"
@@ -123,7 +123,7 @@ def enjoy(argv: list[str] | None = None) -> None:
     get the window.
     """
     require_extra("zoo", *ZOO_MODULES)
-    from sb3_twodrl.zoo import _has_option, prepare_zoo_argv, run_zoo_entry
+    from twodrl_zoo.zoo import _has_option, prepare_zoo_argv, run_zoo_entry
 
     argv = prepare_zoo_argv(sys.argv[1:] if argv is None else argv)
     if not _has_option(argv, "-f", "--folder"):

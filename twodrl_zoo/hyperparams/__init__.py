@@ -2,7 +2,8 @@
 
 :func:`load` gives an env's entry ready for the algorithm's constructor::
 
-    from sb3_twodrl import TwoDimA2C, hyperparams
+    from sb3_twodrl import TwoDimA2C
+    from twodrl_zoo import hyperparams
     hp = hyperparams.load("twoda2c", "NomadOffice-v0")
     model = TwoDimA2C(hp.policy, make_vec_env("NomadOffice-v0", n_envs=hp.n_envs), **hp.kwargs)
     model.learn(hp.n_timesteps, callback=hp.callbacks())
@@ -45,7 +46,7 @@ def hyperparams_path(algo: str, directory: str | os.PathLike | None = None) -> P
     if directory is None:
         path = resources.files(__name__).joinpath(f"{algo}.yml")
         if not isinstance(path, Path):  # installed in a zip: rl-zoo3 needs a file on disk
-            raise ValueError(f"sb3_twodrl.hyperparams is not installed as files ({path})")
+            raise ValueError(f"twodrl_zoo.hyperparams is not installed as files ({path})")
     else:
         path = Path(directory) / f"{algo}.yml"
     if not path.is_file():
