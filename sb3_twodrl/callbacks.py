@@ -17,18 +17,22 @@ Keys read from ``info`` (all optional):
 
 from __future__ import annotations
 
+import copy
 import math
+import warnings
 from collections import deque
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
 
 __all__ = [
     "EpisodeRecord",
     "EpisodeTracker",
+    "GoalCheck",
+    "GoalCheckCallback",
     "NavigationMetricsCallback",
     "StopAfterEpisodes",
     "summarize_episodes",
@@ -221,3 +225,94 @@ class StopAfterEpisodes(BaseCallback):
     def _on_step(self) -> bool:
         self.n_episodes += int(np.sum(self.locals["dones"]))
         return self.n_episodes < self.max_episodes
+
+
+@dataclass(frozen=True)
+class GoalCheck:
+    """One check of :class:`GoalCheckCallback`: when, the share of its episodes that reached the goal, their mean
+    return."""
+
+    timesteps: int
+    goal_rate: float
+    mean_return: float
+
+
+class GoalCheckCallback(EvalCallback):
+    """SB3's ``EvalCallback`` that keeps the policy that reached the goal and stops training once it has learned.
+
+    Every ``eval_freq`` calls (``eval_freq * n_envs`` timesteps) it runs ``n_eval_episodes`` episodes on
+    ``eval_env`` (deterministic by default, e.g. from a map's start) as ``EvalCallback`` does, logging
+    ``eval/success_rate``; the check's **goal rate** is the share of them whose last ``info["is_success"]`` is true.
+
+    - **Keeps what worked:** a copy of the policy's parameters (and of ``VecNormalize``'s statistics) at the best
+      check so far: the highest goal rate, then the highest mean return, then the later check. When training ends
+      (the budget spent, or stopped) the kept parameters are loaded back into the model, so ``model.save`` saves
+      that policy; :attr:`kept` says which check it was.
+    - **Stops when learned:** once ``patience`` consecutive checks reach ``success_threshold`` (None: never
+      stops early); the budget is then a ceiling. :attr:`learned_at` is the timestep of the last of them.
+
+    An ``eval_env`` whose episodes never report ``is_success`` gets a warning and the plain ``EvalCallback``
+    behaviour (nothing kept, no early stop). Other arguments are ``EvalCallback``'s.
+
+    :raises ValueError: if ``success_threshold`` is not in (0, 1] or ``patience`` is not a positive int
+    """
+
+    def __init__(
+        self,
+        eval_env: Any,
+        success_threshold: float | None = 0.8,
+        patience: int = 2,
+        eval_freq: int = 10_000,
+        n_eval_episodes: int = 5,
+        deterministic: bool = True,
+        **kwargs: Any,
+    ) -> None:
+        if success_threshold is not None and not 0.0 < success_threshold <= 1.0:
+            raise ValueError(f"success_threshold must be in (0, 1] or None, got {success_threshold!r}")
+        if isinstance(patience, bool) or not isinstance(patience, int) or patience < 1:
+            raise ValueError(f"patience must be a positive int, got {patience!r}")
+        super().__init__(
+            eval_env, eval_freq=eval_freq, n_eval_episodes=n_eval_episodes, deterministic=deterministic, **kwargs
+        )
+        self.success_threshold, self.patience = success_threshold, patience
+        self.checks: list[GoalCheck] = []
+        self.kept: GoalCheck | None = None
+        self.learned_at: int | None = None
+        self._kept_state: tuple[dict[str, Any], Any] | None = None
+        self._reports_success = True
+
+    def _on_step(self) -> bool:
+        checked = self.eval_freq > 0 and self.n_calls % self.eval_freq == 0
+        continue_training = super()._on_step()
+        if not checked or not self._reports_success:
+            return continue_training
+        if not self._is_success_buffer:
+            warnings.warn("GoalCheckCallback: eval_env reports no info['is_success']; keeping nothing", stacklevel=2)
+            self._reports_success = False
+            return continue_training
+        check = GoalCheck(self.num_timesteps, float(np.mean(self._is_success_buffer)), self.last_mean_reward)
+        self.checks.append(check)
+        if self.kept is None or (check.goal_rate, check.mean_return) >= (self.kept.goal_rate, self.kept.mean_return):
+            self.kept = check
+            statistics = self.model.get_vec_normalize_env()
+            self._kept_state = (
+                copy.deepcopy(self.model.policy.state_dict()),
+                None if statistics is None else copy.deepcopy((statistics.obs_rms, statistics.ret_rms)),
+            )
+        recent = self.checks[-self.patience :]
+        threshold = self.success_threshold
+        if threshold is not None and len(recent) == self.patience and all(c.goal_rate >= threshold for c in recent):
+            self.learned_at = self.num_timesteps
+            if self.verbose >= 1:
+                print(f"Learned: goal rate >= {threshold} in {self.patience} checks in a row, stopping")
+            return False
+        return continue_training
+
+    def _on_training_end(self) -> None:
+        if self._kept_state is None:
+            return
+        parameters, statistics = self._kept_state
+        self.model.policy.load_state_dict(parameters)
+        vec_normalize = self.model.get_vec_normalize_env()
+        if vec_normalize is not None and statistics is not None:
+            vec_normalize.obs_rms, vec_normalize.ret_rms = copy.deepcopy(statistics)

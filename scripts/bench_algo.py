@@ -6,7 +6,7 @@ Each pair trains on the same env id, n_envs, seed and stock arguments (the algor
 process (DummyVecEnv, one torch thread). ``a2c``/``ppo`` pair the 2D-RL algorithm with stock SB3 (what
 a user sees); ``a2c-fast``/``ppo-fast`` with the bench's stock arms, SB3's numbers on the same fast
 path as the 2D-RL algorithms (``twodrl_bench.algorithms.baselines``): the cost of the 2D parts alone.
-``--batched`` runs on the bench's batched envs (``twodrl_bench.vec_env.make_train_env``) instead of DummyVecEnv.
+``--batched`` runs on the bench's batched envs (``twodrl_zoo.vec_env.make_train_env``) instead of DummyVecEnv.
 Throughput is env steps per second of this process's CPU
 time, so other load on a shared machine does not skew it; runs alternate (A2C, TwoDimA2C, PPO,
 TwoDimPPO, A2C, ...) and the median of the repeats is reported.
@@ -24,7 +24,7 @@ from stable_baselines3.common.env_util import make_vec_env
 import twodrl_envs  # noqa: F401  (registers the Nomad office ids)
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
 from twodrl_bench.algorithms.baselines import BatchedA2C, BatchedPPO
-from twodrl_bench.vec_env import make_train_env
+from twodrl_zoo.vec_env import make_train_env
 
 PAIRS: dict[str, tuple[type[BaseAlgorithm], type[BaseAlgorithm]]] = {
     "a2c": (A2C, TwoDimA2C),

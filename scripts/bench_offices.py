@@ -1,7 +1,7 @@
 """Time to learn an office against its shortest path: TwoDimA2C and A2C with the settings derived from the map.
 
 For each map (generated offices by seed and size class, or map files), each algorithm trains with the packaged
-``NomadOffice-v0`` hyperparameters and the settings :func:`twodrl_envs.nomad.settings.map_settings` derives
+``NomadOffice-v0`` hyperparameters and the settings :func:`twodrl_zoo.recipe.derive` derives
 (exploring starts, discount, time limit, budget), on the batched env. Every ``--eval-every`` steps it runs 20
 deterministic episodes from the map's start; it stops at a goal rate >= 0.8 (learned) or at the budget. Printed
 and written as CSV: shortest path, training seconds (wall and this process's CPU, one torch thread) and steps to
@@ -26,11 +26,10 @@ from stable_baselines3.common.callbacks import BaseCallback
 import twodrl_envs  # noqa: F401  (registers the IDs)
 from sb3_twodrl import TwoDimA2C
 from twodrl_bench.intervals import wilson
-from twodrl_bench.vec_env import make_test_env, make_train_env
 from twodrl_envs.nomad.core import office_core
-from twodrl_envs.nomad.office import NomadOfficeEnv
-from twodrl_envs.nomad.settings import map_settings
 from twodrl_zoo import hyperparams
+from twodrl_zoo.recipe import size_class
+from twodrl_zoo.vec_env import make_test_env, make_train_env
 
 ALGOS = {"twoda2c": TwoDimA2C, "a2c": A2C}
 ENV = "NomadOffice-v0"
@@ -85,21 +84,23 @@ class LearnedStop(BaseCallback):
 
 
 def run(algo: str, map_: str, seed: int, eval_every: int) -> dict[str, object]:
-    settings = map_settings(NomadOfficeEnv(map_).robot)
+    facts = hyperparams.task_facts(ENV, {"map": map_})
+    assert facts is not None, f"{map_}: the paper's maps derive no settings"
     hp = hyperparams.load(algo, ENV, env_kwargs={"map": map_})  # the packaged entry with the derived settings
+    limit = hp.eval_env_kwargs["max_episode_steps"]
     env = make_train_env(ENV, hp.n_envs, seed, "batched", hp.env_kwargs)
     test_env = make_test_env(ENV, TEST_EPISODES, "batched", hp.eval_env_kwargs)
     test_env.seed(seed)
     model = ALGOS[algo](hp.policy, env, seed=seed, device="cpu", **hp.kwargs)
-    stop = LearnedStop(test_env, eval_every, settings.max_episode_steps)
+    stop = LearnedStop(test_env, eval_every, limit)
     model.learn(hp.n_timesteps, callback=stop)
     if stop.learned_steps < 0:  # the budget ran out between evaluations: one last one
         stop.pause()
-        stop.rate = goal_rate(model, test_env, settings.max_episode_steps)
+        stop.rate = goal_rate(model, test_env, limit)
     return {
         "map": map_,
-        "size": settings.size,
-        "moves": settings.shortest_path,
+        "size": size_class(facts["shortest_path"]),
+        "moves": facts["shortest_path"],
         "algo": algo,
         "seed": seed,
         "learned": stop.rate >= 0.8,
@@ -107,7 +108,7 @@ def run(algo: str, map_: str, seed: int, eval_every: int) -> dict[str, object]:
         "train_cpu_s": round(stop.train_cpu_s, 1),
         "steps": stop.learned_steps if stop.learned_steps >= 0 else model.num_timesteps,
         "goal_rate": stop.rate,
-        "budget": settings.n_timesteps,
+        "budget": hp.n_timesteps,
     }
 
 

@@ -23,7 +23,7 @@ from stable_baselines3.common.env_util import make_vec_env
 import twodrl_envs  # noqa: F401  (registers the IDs)
 from twodrl_bench.algorithms.variants import INTEREST_MODES, PREFERENCE_MODES
 from twodrl_bench.algorithms.variants import VariantTwoDimA2C as TwoDimA2C  # the interest modes are variants
-from twodrl_bench.vec_env import make_train_env
+from twodrl_zoo.vec_env import make_train_env
 
 
 class Scales(BaseCallback):

@@ -85,8 +85,7 @@ def test_a_timesteps_job_on_a_generated_office_trains_as_the_train_command(tmp_p
     evaluation start at the map's start, and the transfer trials run the stand-in robot in the job's map."""
     pytest.importorskip("rl_zoo3")
     from twodrl_bench.timesteps import resolve_arm, run_job
-    from twodrl_envs.nomad.office import NomadOfficeEnv
-    from twodrl_envs.nomad.settings import map_settings
+    from twodrl_zoo.hyperparams import derived_settings
 
     protocol = {
         "timesteps": 1280,
@@ -103,10 +102,13 @@ def test_a_timesteps_job_on_a_generated_office_trains_as_the_train_command(tmp_p
     }
     kwargs = {"map": "generated:S:{seed}"}
     (row,) = run_job(arm, "NomadOffice-v0", kwargs, protocol, 5, str(tmp_path), ["twodrl_envs"])
-    settings = map_settings(NomadOfficeEnv("generated:S:5").robot)
+    settings = derived_settings("NomadOffice-v0", {"map": "generated:S:5"})
+    assert settings is not None
     (config,) = (tmp_path / "zoo" / "twoda2c_seed5").glob("twoda2c.yml")
     entry = yaml.safe_load(config.read_text())["NomadOffice-v0"]
-    assert entry["gamma"] == settings.gamma and entry["n_timesteps"] == settings.n_timesteps
+    assert (
+        entry["gamma"] == settings.hyperparams["gamma"] and entry["n_timesteps"] == settings.hyperparams["n_timesteps"]
+    )
     assert entry["env_kwargs"] == {"map": "generated:S:5", "starts": "uniform", "max_episode_steps": 300}
     checks = json.loads(row["checks"])
     assert [t for t, _ in checks] == [640]  # at rollout starts (64 envs x 5 steps); none at the budget's end

@@ -12,7 +12,7 @@ import sb3_twodrl.common.policies as policies
 import twodrl_envs  # noqa: F401  (registers the Nomad ids)
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
 from twodrl_bench.algorithms.baselines import BatchedA2C, BatchedPPO
-from twodrl_bench.vec_env import make_train_env
+from twodrl_zoo.vec_env import make_train_env
 
 PPO_ARGS = dict(n_steps=64, batch_size=32, n_epochs=2)
 

@@ -9,11 +9,11 @@ import pytest
 
 import twodrl_envs  # noqa: F401  (registers the IDs)
 from sb3_twodrl.callbacks import EpisodeTracker, summarize_episodes
-from twodrl_bench.vec_env import make_train_env
 from twodrl_envs.analysis.cli import main as record_main
 from twodrl_envs.analysis.dilemma import measure
 from twodrl_envs.nomad.core import office_core
 from twodrl_envs.nomad.geometry import SHIPPED_MAPS, load_map
+from twodrl_zoo.vec_env import make_train_env
 
 VEC = {"num_envs": 2, "vectorization_mode": "vector_entry_point"}
 

@@ -6,8 +6,8 @@ import pytest
 from stable_baselines3.common.vec_env import VecMonitor
 
 import twodrl_envs  # noqa: F401  (registers the IDs)
-from twodrl_bench.vec_env import VectorEnvAdapter
 from twodrl_envs.nomad.batched import BatchedNomadOffice
+from twodrl_zoo.vec_env import VectorEnvAdapter
 
 N_ENVS, STEPS, SEED = 6, 150, 11
 

@@ -274,7 +274,7 @@ def test_batched_real_env_equals_single_envs():
 def test_batched_real_env_trains_with_sb3():
     from stable_baselines3 import A2C
 
-    from twodrl_bench.vec_env import make_train_env
+    from twodrl_zoo.vec_env import make_train_env
 
     venv = make_train_env("NomadOfficeReal-v0", 4, 0, "batched", env_kwargs={"observe_odometry": False})
     assert venv.observation_space.shape == (32,)

@@ -27,7 +27,7 @@ from twodrl_bench.protocol import COLUMNS, METRICS  # noqa: E402
 from twodrl_bench.runner import run_job, run_study  # noqa: E402
 from twodrl_bench.spec import load_spec  # noqa: E402
 from twodrl_bench.trials import run_test_trials  # noqa: E402
-from twodrl_bench.vec_env import VectorEnvAdapter, make_test_env, make_train_env  # noqa: E402
+from twodrl_zoo.vec_env import VectorEnvAdapter, make_test_env, make_train_env  # noqa: E402
 
 __all__ = [
     "ALGOS",

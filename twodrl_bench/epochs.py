@@ -42,8 +42,8 @@ from twodrl_bench.checkpoint import set_rng_state
 from twodrl_bench.experiment import Job, with_seed
 from twodrl_bench.protocol import LEARNING, METRICS, ROUTES, trial_seed
 from twodrl_bench.trials import run_test_trials, transfer_columns
-from twodrl_bench.vec_env import make_test_env, make_train_env
 from twodrl_zoo.hyperparams import evaluate
+from twodrl_zoo.vec_env import make_test_env, make_train_env
 
 Row = dict[str, Any]
 

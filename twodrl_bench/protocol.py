@@ -60,7 +60,7 @@ class EpochProtocol:
     """The paper's epochs (section 3.4.1): ``epochs`` of ``learn_episodes`` (K) learning trials, each followed by
     ``test_episodes`` (M) test trials; run by :mod:`twodrl_bench.epochs`.
 
-    ``vec_env``: ``auto``, ``batched`` or ``dummy`` (:mod:`twodrl_bench.vec_env`); ``checkpoint_every``: epochs
+    ``vec_env``: ``auto``, ``batched`` or ``dummy`` (:mod:`twodrl_zoo.vec_env`); ``checkpoint_every``: epochs
     between checkpoints (0: none); ``transfer``: ``{env, trials, seed}``, the final policy's trials on another env.
     """
 

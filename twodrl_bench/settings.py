@@ -7,7 +7,8 @@ import inspect
 from pathlib import Path
 from typing import Any
 
-from twodrl_zoo.hyperparams import env_settings, hyperparams_path, read_entry
+from twodrl_zoo.hyperparams import derived_settings, hyperparams_path, read_entry, resolve
+from twodrl_zoo.recipe import Derived
 
 ZOO_ONLY = ("n_timesteps", "callback", "normalize", "env_wrapper", "vec_env_wrapper", "frame_stack")
 """Keys of an rl-zoo3 entry that only rl-zoo3 reads: dropped from an epoch protocol's settings."""
@@ -80,16 +81,16 @@ def timesteps_entry(arm: dict[str, Any], env: str, protocol: dict[str, Any]) -> 
     return entry
 
 
-def derived(env: str, env_kwargs: dict[str, Any]) -> dict[str, Any]:
-    """What the env ``env`` derives from its options ``env_kwargs`` (:func:`twodrl_zoo.hyperparams.env_settings`:
-    ``hyperparams``, ``env_kwargs``, ``eval_env_kwargs``), empty where it derives nothing (the paper's maps)."""
-    return env_settings(env, env_kwargs) or {}
+def derived(env: str, env_kwargs: dict[str, Any]) -> Derived | None:
+    """What the task of ``env`` with the options ``env_kwargs`` derives
+    (:func:`twodrl_zoo.hyperparams.derived_settings`), None where it derives nothing (the paper's maps)."""
+    return derived_settings(env, env_kwargs)
 
 
 def test_env_kwargs(env: str, env_kwargs: dict[str, Any]) -> dict[str, Any]:
-    """The options of a test env of ``env``: ``env_kwargs`` with the test settings the env derives from them (the
-    map's start and time limit), as ``sb3-twodrl-train`` tests."""
-    return {**env_kwargs, **derived(env, env_kwargs).get("eval_env_kwargs", {})}
+    """The options of a test env of ``env``: ``env_kwargs`` with the test options of its task (the map's start and
+    time limit), as ``sb3-twodrl-train`` tests (:func:`twodrl_zoo.hyperparams.resolve`)."""
+    return resolve({}, derived(env, env_kwargs), env_kwargs=env_kwargs).eval_env_kwargs
 
 
 def monitor_kwargs(events: str) -> str:

@@ -59,6 +59,7 @@ from twodrl_bench.protocol import TimestepsProtocol
 from twodrl_bench.settings import check_entry, derived, timesteps_entry
 from twodrl_bench.settings import settings_file as settings_file_of
 from twodrl_bench.trials import transfer_columns
+from twodrl_zoo.hyperparams import resolve
 
 Row = dict[str, Any]
 EVAL_SEED = 10**6
@@ -310,12 +311,12 @@ def run(job: Job) -> list[Row]:
         importlib.import_module(package)
     th.set_num_threads(1)
     env, events, env_kwargs = experiment.env, protocol.events, job.env_kwargs
-    settings = derived(env, env_kwargs)
-    entry = {**copy.deepcopy(arm.hyperparams), **settings.get("hyperparams", {}), **copy.deepcopy(arm.override)}
+    settings = resolve(
+        copy.deepcopy(arm.hyperparams), derived(env, env_kwargs), copy.deepcopy(arm.override), env_kwargs
+    )
+    entry = settings.entry
     check_entry(arm.name, entry, protocol.as_dict())
-    test_kwargs = {**(entry.get("env_kwargs") or {}), **env_kwargs, **settings.get("eval_env_kwargs", {})}
-    if env_kwargs or settings:
-        entry["env_kwargs"] = {**(entry.get("env_kwargs") or {}), **settings.get("env_kwargs", {}), **env_kwargs}
+    test_kwargs = settings.eval_env_kwargs
     if protocol.check_every and entry.get("normalize"):
         raise ValueError(f"arm {arm.name!r}: protocol.check_every needs an entry without normalize")
     budget = int(protocol.timesteps or entry["n_timesteps"])

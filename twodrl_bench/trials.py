@@ -92,7 +92,7 @@ def tally(outcomes: list[str]) -> dict[str, int]:
 def _outcomes(model: BaseAlgorithm, env_id: str, n: int, seed: int, env_kwargs: dict[str, Any]) -> list[str]:
     """Outcomes of ``n`` deterministic trials on ``env_id`` (sub-env ``i`` seeded ``seed + i``), with the test
     settings the env derives from ``env_kwargs`` (:func:`twodrl_bench.settings.test_env_kwargs`)."""
-    from twodrl_bench.vec_env import make_test_env
+    from twodrl_zoo.vec_env import make_test_env
 
     env = make_test_env(env_id, n, env_kwargs=test_env_kwargs(env_id, env_kwargs))
     try:

@@ -13,12 +13,14 @@ with the ``pip install`` line that adds it (:func:`require_extra`). ``sb3-twodrl
 
 from __future__ import annotations
 
+import difflib
 import importlib
 import importlib.util
 import runpy
 import sys
+from typing import Any
 
-__all__ = ["RENDER_MODULE", "ZOO_MODULES", "enjoy", "report_goal_rate", "require_extra", "train"]
+__all__ = ["RENDER_MODULE", "ZOO_MODULES", "check_command_line", "enjoy", "report_goal_rate", "require_extra", "train"]
 
 ZOO_MODULES = ("rl_zoo3", "optuna", "pandas", "requests")
 """What the ``zoo`` extra installs and the commands import (rl-zoo3's enjoy imports ``requests`` undeclared)."""
@@ -42,45 +44,82 @@ def require_extra(extra: str, *modules: str) -> None:
 
 
 def train(argv: list[str] | None = None) -> None:
-    """``sb3-twodrl-train``: rl-zoo3's ``train`` with the 2D-RL algorithms and the packaged hyperparameters."""
+    """``sb3-twodrl-train``: rl-zoo3's ``train`` with the 2D-RL algorithms, the packaged hyperparameters and this
+    project's :class:`~twodrl_zoo.manager.ExperimentManager` (the task's settings, goal checks, batched envs); then
+    the goal rate of the saved policy (:func:`report_goal_rate`)."""
     require_extra("zoo", *ZOO_MODULES)
-    from rl_zoo3.train import train as zoo_train
+    import rl_zoo3.train
 
-    from twodrl_zoo.zoo import _has_option, apply_env_settings, prepare_zoo_argv, run_zoo_entry
+    from twodrl_zoo.manager import ExperimentManager
+    from twodrl_zoo.zoo import _has_option, prepare_zoo_argv, run_zoo_entry
 
     argv = prepare_zoo_argv(sys.argv[1:] if argv is None else argv, packaged_conf=True)
-    argv, settings = apply_env_settings(argv)
-    if settings is not None:
-        print(f"sb3-twodrl-train: {settings.get('note') or 'settings derived from the env options'}", flush=True)
+    options = check_command_line("sb3-twodrl-train", argv)
     if not _has_option(argv, "--num-threads"):
         argv += ["--num-threads", "1"]
-    run_zoo_entry("sb3-twodrl-train", argv, zoo_train)
+    zoo_manager = rl_zoo3.train.ExperimentManager
+    rl_zoo3.train.ExperimentManager = ExperimentManager  # type: ignore[misc]
+    try:
+        run_zoo_entry("sb3-twodrl-train", argv, rl_zoo3.train.train)
+    finally:
+        rl_zoo3.train.ExperimentManager = zoo_manager  # type: ignore[misc]
     if not _has_option(argv, "-optimize", "--optimize-hyperparameters"):
-        report_goal_rate(argv)
+        report_goal_rate(argv, options)
 
 
-def report_goal_rate(argv: list[str], episodes: int = 20) -> float | None:
+def check_command_line(prog: str, argv: list[str]) -> dict[str, dict[str, Any]]:
+    """The command line's ``key:value`` options, parsed, after checking what would otherwise fail deep in rl-zoo3
+    with a traceback: the env ID, the ``key:value`` literals and the env's options (a map, a database). Exits with
+    one line naming what is wrong."""
+    import gymnasium as gym
+
+    from twodrl_zoo.zoo import _dict_options, _option_value
+
+    try:
+        _, given = _dict_options(argv)
+    except (NameError, SyntaxError, ValueError) as error:
+        sys.exit(
+            f"{prog}: a key:value option is not a Python literal ({error}); quote strings twice, "
+            """e.g. --env-kwargs map:'"my_office.json"'"""
+        )
+    env_id = _option_value(argv, "--env")
+    if env_id is not None and env_id not in gym.registry:
+        close = difflib.get_close_matches(env_id, list(gym.registry), n=1)
+        sys.exit(f"{prog}: env {env_id!r} is not registered" + (f"; did you mean {close[0]!r}?" if close else ""))
+    if env_id is not None:
+        for option in ("--env-kwargs", "--eval-env-kwargs"):
+            try:
+                gym.make(env_id, **{**given["--env-kwargs"], **given[option]}).close()
+            except (ValueError, TypeError, FileNotFoundError) as error:
+                sys.exit(f"{prog}: {env_id} with {option} {given[option]}: {error}")
+    return given
+
+
+def report_goal_rate(argv: list[str], given: dict[str, dict[str, Any]], episodes: int = 20) -> float | None:
     """Run ``episodes`` deterministic test episodes of the model ``train`` just saved; print the goal rate.
 
-    The test env is made with the command's ``--env-kwargs`` and ``--eval-env-kwargs`` (an env that derives
-    settings starts its test episodes where its user's would: a map's start). The goal rate is the share of
-    episodes whose last ``info["is_success"]`` is true; an env that never sets it gets no line (None). Below 0.8
-    the line says so and what to change.
+    The test env is the run's evaluation env (``goal_checks.json``: the command's options with the task's test
+    options, e.g. a map's start). The line says which policy it is: the goal check it was kept at (steps, goal rate)
+    and how long training took. The goal rate is the share of episodes whose last ``info["is_success"]`` is true;
+    an env that never sets it gets no line (None). Below 0.8 the line says so and what to change.
     """
+    import json
     import os
 
     import numpy as np
     from rl_zoo3.utils import ALGOS, create_test_env, get_latest_run_id, get_saved_hyperparams
 
-    from twodrl_zoo.zoo import _dict_options, _option_value
+    from twodrl_zoo.manager import CHECKS_FILE
+    from twodrl_zoo.zoo import _option_value
 
     algo, env_id = _option_value(argv, "--algo") or "ppo", _option_value(argv, "--env") or "CartPole-v1"
     folder = _option_value(argv, "-f", "--log-folder") or "logs"
-    _, given = _dict_options(argv)
     log_path = os.path.join(folder, algo, f"{env_id}_{get_latest_run_id(os.path.join(folder, algo), env_id)}")
     model_path = os.path.join(log_path, f"{env_id}.zip")
     if not os.path.isfile(model_path):
         return None
+    with open(os.path.join(log_path, CHECKS_FILE)) as f:
+        record = json.load(f)
     hyperparams, stats_path = get_saved_hyperparams(os.path.join(log_path, env_id), norm_reward=False, test_mode=True)
     env = create_test_env(
         env_id,
@@ -90,7 +129,7 @@ def report_goal_rate(argv: list[str], episodes: int = 20) -> float | None:
         log_dir=None,
         should_render=False,
         hyperparams=hyperparams,
-        env_kwargs={**given["--env-kwargs"], **given["--eval-env-kwargs"]},
+        env_kwargs=record["test_env_kwargs"] or {**given["--env-kwargs"], **given["--eval-env-kwargs"]},
     )
     model = ALGOS[algo].load(model_path, device="cpu")
     goals: list[bool] = []
@@ -105,10 +144,20 @@ def report_goal_rate(argv: list[str], episodes: int = 20) -> float | None:
             goals.append(bool(infos[0]["is_success"]))
     env.close()
     rate = float(np.mean(goals))
-    print(f"sb3-twodrl-train: goal rate {rate:.2f} ({sum(goals)} of {episodes} deterministic test episodes)")
+    kept, learned = record["kept"], record["learned_at"] is not None
+    which = (
+        f"the policy of the check at {kept['timesteps']:,} steps (goal rate {kept['goal_rate']:.2f}), "
+        if kept
+        else "the final policy, "
+    )
+    stop = "learned, stopped" if learned else "budget spent"
+    print(
+        f"sb3-twodrl-train: goal rate {rate:.2f} ({sum(goals)} of {episodes} deterministic test episodes) of {which}"
+        f"trained {record['num_timesteps']:,} of {record['n_timesteps']:,} steps ({stop}) in {record['train_s']:.0f} s"
+    )
     if rate < 0.8:
         print(
-            f"sb3-twodrl-train: below 0.8: the policy has not learned the task in {model.num_timesteps:,} steps. "
+            f"sb3-twodrl-train: below 0.8: no check reached the goal reliably in {record['num_timesteps']:,} steps. "
             "Train longer (-n, the budget), try another --seed, or make the task shorter (the map's start nearer "
             "its goal); docs/own_office.md says what each setting does."
         )

@@ -22,12 +22,11 @@ from typing import Any
 
 from sb3_twodrl.a2c import TwoDimA2C
 from sb3_twodrl.ppo import TwoDimPPO
-from twodrl_zoo.hyperparams import PACKAGED, env_settings, hyperparams_path
+from twodrl_zoo.hyperparams import PACKAGED, hyperparams_path
 
 __all__ = [
     "GYM_PACKAGES_GROUP",
     "ZOO_ALGOS",
-    "apply_env_settings",
     "convert_two_dim_params",
     "import_gym_packages",
     "prepare_zoo_argv",
@@ -194,32 +193,3 @@ def _dict_options(argv: list[str]) -> tuple[list[str], dict[str, dict[str, Any]]
         parser.add_argument(option, type=str, nargs="+", action=StoreDict, default={})
     known, rest = parser.parse_known_args(argv)
     return rest, {option: getattr(known, option[2:].replace("-", "_")) for option in _DICT_OPTIONS}
-
-
-def apply_env_settings(argv: list[str]) -> tuple[list[str], dict[str, Any] | None]:
-    """rl-zoo3 ``train`` arguments with the settings the env derives from its ``--env-kwargs``, and those settings.
-
-    The settings are the env class's ``training_settings`` (:func:`~twodrl_zoo.hyperparams.env_settings`); None
-    leaves the command line unchanged.
-
-    Derived hyperparameters are added to ``--hyperparams``, training env options to ``--env-kwargs`` and test env
-    options to ``--eval-env-kwargs``; what the user wrote wins (``-n`` over the budget, as rl-zoo3 does).
-    """
-    env_id = _option_value(argv, "--env") or "CartPole-v1"
-    rest, given = _dict_options(argv)
-    settings = env_settings(env_id, given["--env-kwargs"])
-    if settings is None:
-        return argv, None
-    merged = {
-        "--hyperparams": {**settings.get("hyperparams", {}), **given["--hyperparams"]},
-        "--env-kwargs": {**settings.get("env_kwargs", {}), **given["--env-kwargs"]},
-        "--eval-env-kwargs": {
-            **given["--env-kwargs"],
-            **settings.get("eval_env_kwargs", {}),
-            **given["--eval-env-kwargs"],
-        },
-    }
-    for option, values in merged.items():
-        if values:
-            rest += [option, *(f"{key}:{value!r}" for key, value in values.items())]
-    return rest, settings

@@ -11,10 +11,10 @@
 The console commands and the bench find the files with :func:`hyperparams_path` and read an entry as
 written with :func:`read_entry`; there is no default entry.
 
-An env may derive settings from its options (a user's own map, say): if its class (the registered entry point)
-has a ``training_settings(**options)`` class method returning a dict (``hyperparams`` over the entry's,
-``env_kwargs`` for training envs, ``eval_env_kwargs`` for test envs, a ``note``), :func:`load` applies it when
-given the env's options, and the training command does too (:func:`env_settings`). None keeps the entry as it is.
+An env may state facts of its task (a user's own map, say): if its class (the registered entry point) has a
+``task_facts(**options)`` class method returning a dict, :func:`twodrl_zoo.recipe.derive` turns them into
+settings. :func:`resolve` is the one precedence: the written entry < what the task derives < what the user passes;
+:func:`load` (given the env's options), the training command and the bench all resolve through it.
 """
 
 from __future__ import annotations
@@ -28,7 +28,21 @@ from typing import Any
 
 import yaml
 
-__all__ = ["PACKAGED", "Hyperparams", "env_class", "env_settings", "evaluate", "hyperparams_path", "load", "read_entry"]
+from twodrl_zoo.recipe import Derived, derive
+
+__all__ = [
+    "PACKAGED",
+    "Hyperparams",
+    "Resolved",
+    "derived_settings",
+    "env_class",
+    "evaluate",
+    "hyperparams_path",
+    "load",
+    "read_entry",
+    "resolve",
+    "task_facts",
+]
 
 PACKAGED = ("a2c", "ppo", "twoda2c", "twodppo")
 """The algorithms this package ships a file for."""
@@ -126,34 +140,81 @@ def _schedule(key: str, value: Any) -> Any:
 def env_class(env_id: str) -> tuple[Any, dict[str, Any]]:
     """The registered entry point of ``env_id`` (its class, or the function that makes it) and its registered kwargs.
 
-    :raises ValueError: if ``env_id`` is registered without an entry point
+    :raises ValueError: if ``env_id`` is not registered, or is registered without an entry point
     """
     import gymnasium as gym
     from gymnasium.envs.registration import load_env_creator
 
-    spec = gym.spec(env_id)
+    try:
+        spec = gym.spec(env_id)
+    except gym.error.Error as error:
+        raise ValueError(f"env {env_id!r} is not registered: {error}") from None
     if spec.entry_point is None:
         raise ValueError(f"{env_id} is registered without an entry point")
     creator = spec.entry_point if callable(spec.entry_point) else load_env_creator(spec.entry_point)
     return creator, dict(spec.kwargs)
 
 
-def env_settings(env_id: str, env_kwargs: dict[str, Any] | None = None) -> dict[str, Any] | None:
-    """The settings the env ``env_id`` derives from its options ``env_kwargs`` (module docstring), or None.
+def task_facts(env_id: str, env_kwargs: dict[str, Any] | None = None) -> dict[str, Any] | None:
+    """The facts the env ``env_id`` states of its task with the options ``env_kwargs`` (its class's
+    ``task_facts(**options)``: :mod:`twodrl_zoo.recipe`), or None (no such method, or the registered defaults are
+    the task: the paper's office).
 
-    None when the env's class has no ``training_settings`` or derives nothing from these options.
-
-    :raises ValueError: if the class returns something else than None or a dict of the known keys
+    :raises ValueError: if the class returns something else than None or a dict
     """
     creator, registered = env_class(env_id)
-    derive = getattr(creator, "training_settings", None)
-    if derive is None:
+    state = getattr(creator, "task_facts", None)
+    if state is None:
         return None
-    settings = derive(**{**registered, **(env_kwargs or {})})
-    known = {"hyperparams", "env_kwargs", "eval_env_kwargs", "note"}
-    if settings is not None and (not isinstance(settings, dict) or set(settings) - known):
-        raise ValueError(f"{env_id}: training_settings must return None or a dict of {sorted(known)}, got {settings!r}")
-    return settings
+    facts = state(**{**registered, **(env_kwargs or {})})
+    if facts is not None and not isinstance(facts, dict):
+        raise ValueError(f"{env_id}: task_facts must return None or a dict, got {facts!r}")
+    return facts
+
+
+def derived_settings(env_id: str, env_kwargs: dict[str, Any] | None = None) -> Derived | None:
+    """The settings :func:`twodrl_zoo.recipe.derive` gives the task of ``env_id`` with ``env_kwargs``; None where
+    the env states no facts (:func:`task_facts`)."""
+    facts = task_facts(env_id, env_kwargs)
+    return None if facts is None else derive(facts)
+
+
+@dataclass(frozen=True)
+class Resolved:
+    """A run's settings, resolved once (:func:`resolve`): the rl-zoo3 entry, the training and test env options."""
+
+    entry: dict[str, Any]
+    """The entry as rl-zoo3 reads it: the written one < what the env's task derives < what the user passes."""
+    env_kwargs: dict[str, Any]
+    eval_env_kwargs: dict[str, Any]
+    note: str = ""
+    """What was derived from the task (:class:`twodrl_zoo.recipe.Derived`), empty if nothing."""
+
+
+def resolve(
+    entry: dict[str, Any],
+    derived: Derived | None,
+    hyperparams: dict[str, Any] | None = None,
+    env_kwargs: dict[str, Any] | None = None,
+    eval_env_kwargs: dict[str, Any] | None = None,
+) -> Resolved:
+    """The one precedence of run settings: the written ``entry`` (packaged, rl-zoo3's or the user's file) < the
+    settings ``derived`` from the env's task < what the user passes (``hyperparams``, ``env_kwargs``,
+    ``eval_env_kwargs``). Used by the train command, :func:`load` and both bench protocols.
+
+    Training envs get the entry's ``env_kwargs`` < the derived training options < ``env_kwargs``; test envs the
+    entry's ``env_kwargs`` < ``env_kwargs`` < the derived test options (the map's start, the time limit) <
+    ``eval_env_kwargs``.
+    """
+    derived = derived or Derived()
+    written = dict(entry.get("env_kwargs") or {})
+    given = dict(env_kwargs or {})
+    merged = {**entry, **derived.hyperparams, **(hyperparams or {})}
+    train = {**written, **derived.env_kwargs, **given}
+    test = {**written, **given, **derived.eval_env_kwargs, **(eval_env_kwargs or {})}
+    if train:
+        merged["env_kwargs"] = train
+    return Resolved(merged, train, test, derived.note)
 
 
 def load(
@@ -161,8 +222,8 @@ def load(
 ) -> Hyperparams:
     """The ``env_id`` entry of ``<algo>.yml`` (the packaged file, or the one in ``directory``), ready to train.
 
-    With ``env_kwargs`` (the env's options, e.g. ``{"map": "my_office.json"}``) the settings the env derives from
-    them (:func:`env_settings`) replace the entry's and fill :attr:`Hyperparams.env_kwargs` and
+    With ``env_kwargs`` (the env's options, e.g. ``{"map": "my_office.json"}``) the settings the env's task derives
+    (:func:`derived_settings`) go over the entry's (:func:`resolve`) and fill :attr:`Hyperparams.env_kwargs` and
     :attr:`Hyperparams.eval_env_kwargs`.
 
     :raises ValueError: naming ``algo`` or ``env_id`` and what exists, if there is no such file or entry,
@@ -171,11 +232,9 @@ def load(
     if directory is None and algo not in PACKAGED:
         raise ValueError(f"algo {algo!r} has no packaged hyperparameters (packaged: {', '.join(PACKAGED)})")
     path = hyperparams_path(algo, directory)
-    entry = read_entry(path, env_id)
-    options = dict(env_kwargs or {})
-    derived = env_settings(env_id, options) if env_kwargs is not None else None
-    derived = derived or {}
-    entry.update(derived.get("hyperparams", {}))
+    derived = derived_settings(env_id, env_kwargs) if env_kwargs is not None else None
+    resolved = resolve(read_entry(path, env_id), derived, env_kwargs=env_kwargs)
+    entry = {key: value for key, value in resolved.entry.items() if key != "env_kwargs"}
     zoo_only = [key for key in _ZOO_ONLY if key in entry]
     if zoo_only:
         raise ValueError(f"{path}, {env_id}: {', '.join(zoo_only)} is applied by rl-zoo3 only (sb3-twodrl-train)")
@@ -204,7 +263,7 @@ def load(
         n_timesteps=int(float(entry["n_timesteps"])),
         normalize=normalize,
         callback=tuple(callback if isinstance(callback, list) else [callback]),  # one callback or a list
-        env_kwargs={**derived.get("env_kwargs", {}), **options},
-        eval_env_kwargs={**options, **derived.get("eval_env_kwargs", {})},
-        note=derived.get("note", ""),
+        env_kwargs=resolved.env_kwargs,
+        eval_env_kwargs=resolved.eval_env_kwargs,
+        note=resolved.note,
     )

@@ -7,7 +7,7 @@ or with ``observation="cell"``, and off it with ``step_sd_cm`` / ``slip_sd_cm`` 
 ``s`` and reset again after every episode (same observations, rewards, terminations, truncations and,
 with ``render_mode="rgb_array"``, frames). The rules are :mod:`twodrl_envs.nomad.core`'s, as the single
 env's; the robot is a :class:`~twodrl_envs.nomad.core.Robot`. Stable-Baselines3 sees it through any
-adapter of a same-step-autoreset ``VectorEnv`` (the bench's ``twodrl_bench.vec_env.VectorEnvAdapter``).
+adapter of a same-step-autoreset ``VectorEnv`` (the bench's ``twodrl_zoo.vec_env.VectorEnvAdapter``).
 """
 
 from __future__ import annotations

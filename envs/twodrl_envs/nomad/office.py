@@ -30,7 +30,7 @@ from twodrl_envs.nomad.core import (
 )
 from twodrl_envs.nomad.geometry import MOVES_CM, ROBOT_RADIUS_CM, clearance
 from twodrl_envs.nomad.sensors import NoiseModel
-from twodrl_envs.nomad.settings import map_settings
+from twodrl_envs.nomad.task import task_facts
 
 OBSERVATIONS = ("sensors", "cell")
 
@@ -145,22 +145,12 @@ class NomadOfficeEnv(gym.Env):
         return RawObservation(map, observe_odometry)
 
     @classmethod
-    def training_settings(cls, **options: Any) -> dict[str, Any] | None:
-        """Training settings derived from the map of an env made with ``options``; None on the paper's maps.
-
-        A trainer applies ``hyperparams`` over its own, ``env_kwargs`` to its training envs and
-        ``eval_env_kwargs`` to its test envs, and shows ``note`` (:mod:`twodrl_envs.nomad.settings`).
-        """
+    def task_facts(cls, **options: Any) -> dict[str, Any] | None:
+        """The facts of the task of an env made with ``options`` (:func:`twodrl_envs.nomad.task.task_facts`: shortest
+        path, farthest start, whether readings vary, the training and test episode options); None on the paper's
+        maps, whose task is the registered defaults."""
         own = {key: value for key, value in options.items() if key not in ("starts", "max_episode_steps")}
-        settings = map_settings(cls(**own).robot)
-        if settings is None:
-            return None
-        return {
-            "hyperparams": settings.hyperparams(),
-            "env_kwargs": settings.env_kwargs(),
-            "eval_env_kwargs": settings.eval_env_kwargs(),
-            "note": settings.note(),
-        }
+        return task_facts(cls(**own).robot)
 
     def _setup(
         self,

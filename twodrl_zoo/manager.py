@@ -1,0 +1,113 @@
+"""rl-zoo3's ``ExperimentManager`` with this project's settings, goal checks and batched envs: the one model
+factory of ``sb3-twodrl-train`` and the bench's timesteps protocol.
+
+What it changes of rl-zoo3's (everything else, every option, the run folder, is rl-zoo3's):
+
+- **settings**: the env's task facts derive settings (:func:`twodrl_zoo.hyperparams.derived_settings`) that go
+  between the hyperparameter file and what the user passes (:func:`twodrl_zoo.hyperparams.resolve`): the file
+  < the task < ``--hyperparams`` (and ``-n``); the training envs get the task's training options, the
+  evaluation envs its test options (a map's start, its time limit) unless the user gives their own;
+- **goal checks**: the evaluation is :class:`sb3_twodrl.callbacks.GoalCheckCallback`, which keeps the policy with
+  the best goal rate and stops once :data:`PATIENCE` checks in a row reach :data:`SUCCESS_THRESHOLD`; the model
+  saved as ``<env>.zip`` is the kept one, and ``goal_checks.json`` in the run folder says which check it was, what
+  every check gave and how long training took;
+- **batched envs**: where the registry gives the env a same-step-autoreset vector entry point
+  (:func:`twodrl_zoo.vec_env.has_batched_env`) and the entry wraps nothing, the training and evaluation envs are
+  that batch (:class:`~twodrl_zoo.vec_env.VectorEnvAdapter`, under one ``VecMonitor``): the same episodes as
+  ``DummyVecEnv`` of single envs, several times faster.
+
+Requires the ``zoo`` extra.
+"""
+
+from __future__ import annotations
+
+import inspect
+import json
+import os
+import time
+from typing import Any
+
+from rl_zoo3.callbacks import SaveVecNormalizeCallback
+from rl_zoo3.exp_manager import ExperimentManager as ZooExperimentManager
+from stable_baselines3.common.base_class import BaseAlgorithm
+from stable_baselines3.common.vec_env import VecEnv, VecMonitor
+
+from sb3_twodrl.callbacks import GoalCheckCallback
+from twodrl_zoo.hyperparams import derived_settings, resolve
+from twodrl_zoo.vec_env import has_batched_env, make_train_env
+
+__all__ = ["CHECKS_FILE", "PATIENCE", "SUCCESS_THRESHOLD", "ExperimentManager"]
+
+SUCCESS_THRESHOLD = 0.8
+"""The goal rate a check must reach (the office's "learned": 80% of test trials, paper section 3.4)."""
+PATIENCE = 2
+"""Checks in a row at :data:`SUCCESS_THRESHOLD` after which training stops."""
+CHECKS_FILE = "goal_checks.json"
+"""The run folder's record of the goal checks, the kept policy and the training time."""
+
+
+class ExperimentManager(ZooExperimentManager):
+    """rl-zoo3's ``ExperimentManager`` (same arguments) with the changes of the module docstring."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        given = inspect.signature(ZooExperimentManager.__init__).bind(self, *args, **kwargs).arguments
+        given.pop("self")
+        derived = derived_settings(given["env_id"], given.get("env_kwargs"))
+        if derived is not None:
+            resolved = resolve(
+                {}, derived, given.get("hyperparams"), given.get("env_kwargs"), given.get("eval_env_kwargs")
+            )
+            given["hyperparams"] = {k: v for k, v in resolved.entry.items() if k != "env_kwargs"}
+            given["env_kwargs"], given["eval_env_kwargs"] = resolved.env_kwargs, resolved.eval_env_kwargs
+            print(f"sb3-twodrl: {derived.note}", flush=True)
+        super().__init__(**given)
+        self.goal_checks: GoalCheckCallback | None = None
+        self._clock = time.perf_counter()
+
+    def create_callbacks(self) -> None:
+        """rl-zoo3's callbacks, its ``EvalCallback`` a :class:`~sb3_twodrl.callbacks.GoalCheckCallback`."""
+        eval_freq, self.eval_freq = self.eval_freq, -1
+        super().create_callbacks()
+        self.eval_freq = eval_freq
+        if self.eval_freq > 0 and not self.optimize_hyperparameters:
+            self.eval_freq = max(self.eval_freq // self.n_envs, 1)
+            self.goal_checks = GoalCheckCallback(
+                self.create_envs(self.n_eval_envs, eval_env=True),
+                success_threshold=SUCCESS_THRESHOLD,
+                patience=PATIENCE,
+                callback_on_new_best=SaveVecNormalizeCallback(save_freq=1, save_path=self.params_path),
+                best_model_save_path=self.save_path,
+                n_eval_episodes=self.n_eval_episodes,
+                log_path=self.save_path,
+                eval_freq=self.eval_freq,
+                deterministic=self.deterministic_eval,
+            )
+            self.callbacks.append(self.goal_checks)
+
+    def create_envs(self, n_envs: int, eval_env: bool = False, no_log: bool = False) -> VecEnv:
+        """The batch of the registry's vector entry point where there is one (module docstring), else rl-zoo3's."""
+        plain = self.env_wrapper is None and self.vec_env_wrapper is None and self.frame_stack is None
+        if not (plain and self.vec_env_class.__name__ == "DummyVecEnv" and has_batched_env(self.env_name.gym_id)):
+            return super().create_envs(n_envs, eval_env, no_log)
+        options = self.eval_env_kwargs if eval_env else self.env_kwargs
+        env: VecEnv = make_train_env(self.env_name.gym_id, n_envs, self.seed, "batched", options)
+        log_dir = None if eval_env or no_log else self.save_path
+        filename = None if log_dir is None else os.path.join(log_dir, "monitor.csv")
+        env = VecMonitor(env, filename, info_keywords=tuple(self.monitor_kwargs.get("info_keywords", ())))
+        return self._maybe_normalize(env, eval_env)
+
+    def save_trained_model(self, model: BaseAlgorithm) -> None:
+        """rl-zoo3's save (the kept policy, loaded back at the end of training), and :data:`CHECKS_FILE`."""
+        super().save_trained_model(model)
+        checks = self.goal_checks
+        record = {
+            "train_s": round(time.perf_counter() - self._clock, 1),
+            "num_timesteps": model.num_timesteps,
+            "n_timesteps": self.n_timesteps,
+            "checks": [] if checks is None else [vars(c) for c in checks.checks],
+            "kept": None if checks is None or checks.kept is None else vars(checks.kept),
+            "learned_at": None if checks is None else checks.learned_at,
+            "test_env_kwargs": self.eval_env_kwargs,
+        }
+        with open(os.path.join(self.save_path, CHECKS_FILE), "w") as f:
+            json.dump(record, f, indent=1, default=str)

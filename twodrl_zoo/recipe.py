@@ -1,0 +1,94 @@
+"""Training settings from a task's facts: the one rule, for offices other than the paper's.
+
+The packaged settings (discount 0.9, 1M steps) were made for the paper's office, 17 moves from start to goal. On a
+larger office the goal's discounted value at the start vanishes (0.9**80 ~ 2e-4). An env that states its task's
+facts (a class method ``task_facts(**options)``, e.g. :func:`twodrl_envs.nomad.task.task_facts`: shortest path
+``L``, farthest start ``D``, whether readings vary, its training and test episode options) gets from
+:func:`derive`:
+
+* its own **episode options**: training episodes from random reachable cells (exploring starts), tests from the
+  map's start, with its time limit;
+* the **reward discount** ``gamma = max(0.9, 1 - 1/L)``: the goal's reward discounted over the path keeps about
+  ``e**-1`` of its value at the start (the punishment discount stays the paper's short one);
+* the **budget** ``n_timesteps = min(max(1e6, 40,000 L), 2e7)`` (rounded up to 1e5), twice that where a cell's
+  readings vary from visit to visit (on ``docs/own_office.md``'s example the database env learned in 3 of 4 seeds
+  at 1M steps, in 2 of 2 at 2M). With goal checks (:class:`sb3_twodrl.callbacks.GoalCheckCallback`) the budget
+  is a ceiling: training stops once the policy has learned;
+* on offices longer than :data:`LONG_MOVES` moves (size L and beyond), where the value of the goal differs little
+  between neighbouring cells far from it (``gamma**d (1 - gamma)``): the **entropy bonus** drops from the
+  packaged 0.05 to :data:`LONG_ENT_COEF` (the bonus otherwise outweighs those differences and keeps the far policy
+  near uniform) and, on the lattice, the **progress signal** (the env option ``progress``: a move closer to the
+  goal adds to ``r_R``, one farther to ``r_P``) gives every move a signal of its own.
+
+``r_R >= 0`` and ``r_P >= 0`` keep their meaning: nothing here changes an evaluation. The rules were set on the
+development maps (``docs/own_office.md``'s example, the shipped ``corridor``, generated map seeds 0-99) before any
+held-out map was trained on.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+SIZE_CLASSES = (("S", 30), ("M", 80), ("L", 200))
+"""Size class by shortest path: S <= 30 moves, M 31-80, L 81-200; longer is XL."""
+LONG_MOVES = 80
+"""Shortest paths longer than this (size L and beyond) get the entropy bonus and the progress signal below."""
+LONG_ENT_COEF = 0.01
+LONG_PROGRESS = 0.05
+MEASURED_MOVES = 200
+"""The longest shortest path the rule was measured on (``docs/own_office.md``); beyond it, a warning."""
+
+
+def size_class(moves: int) -> str:
+    """``"S"``, ``"M"``, ``"L"`` or ``"XL"`` for a shortest path of ``moves`` moves."""
+    return next((name for name, most in SIZE_CLASSES if moves <= most), "XL")
+
+
+@dataclass(frozen=True)
+class Derived:
+    """What :func:`derive` gives: hyperparameters over the packaged ones, training and test env options, a note."""
+
+    hyperparams: dict[str, Any] = field(default_factory=dict)
+    env_kwargs: dict[str, Any] = field(default_factory=dict)
+    eval_env_kwargs: dict[str, Any] = field(default_factory=dict)
+    note: str = ""
+
+
+def derive(facts: dict[str, Any]) -> Derived:
+    """The settings of a task with ``facts`` (module docstring).
+
+    :raises ValueError: if a fact the rule reads is missing or not a positive number of moves
+    """
+    for key in ("shortest_path", "farthest_start"):
+        if not isinstance(facts.get(key), int) or facts[key] < 1:
+            raise ValueError(f"task facts: {key} must be a positive number of moves, got {facts.get(key)!r}")
+    moves = facts["shortest_path"]
+    budget = min(max(1_000_000, 40_000 * moves), 20_000_000) * (2 if facts.get("varying_readings") else 1)
+    hyperparams: dict[str, Any] = {
+        "gamma": round(max(0.9, 1.0 - 1.0 / moves), 3),
+        "n_timesteps": int(math.ceil(budget / 100_000) * 100_000),
+    }
+    env_kwargs = dict(facts.get("train_options", {}))
+    if moves > LONG_MOVES:
+        hyperparams["ent_coef"] = LONG_ENT_COEF
+        if facts.get("on_lattice"):
+            env_kwargs["progress"] = LONG_PROGRESS
+    eval_env_kwargs = dict(facts.get("test_options", {}))
+    note = (
+        f"settings derived from the map ({size_class(moves)}: shortest path {moves} moves, farthest start "
+        f"{facts['farthest_start']}): gamma {hyperparams['gamma']}, time limit "
+        f"{env_kwargs.get('max_episode_steps', '-')} steps, {hyperparams['n_timesteps']:,} steps at most, training "
+        "episodes from random reachable cells (exploring starts)"
+    )
+    if "ent_coef" in hyperparams:
+        note += f", entropy bonus {hyperparams['ent_coef']}"
+    if "progress" in env_kwargs:
+        note += f", progress signal {env_kwargs['progress']}"
+    if moves > MEASURED_MOVES:
+        note += (
+            f"; WARNING: the shortest path is longer than the {MEASURED_MOVES} moves these settings were measured "
+            "on, they may not learn it in the budget: split the office, or move the start nearer the goal"
+        )
+    return Derived(hyperparams, env_kwargs, eval_env_kwargs, note)
