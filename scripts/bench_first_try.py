@@ -1,0 +1,146 @@
+"""Does a user's office learn on the first try? ``sb3-twodrl-train`` run as docs/own_office.md writes it, per map.
+
+For each map and algorithm it runs, in a fresh process and an empty folder,
+
+    sb3-twodrl-train --algo ALGO --env NomadOffice-v0 --env-kwargs map:'"MAP"'
+
+with no ``--seed`` (rl-zoo3 then draws one, as for any user; the row records it), and reads the command's own
+output: the goal rate of its 20 deterministic test episodes from the map's start, and its ``goal_checks.json``
+(the kept check, whether it stopped as learned, training seconds). Rows are appended to ``--out`` (a map and
+algorithm already there are skipped: the run resumes); ``--table`` prints the table of a rows file.
+
+    OMP_NUM_THREADS=1 python scripts/bench_first_try.py --algos twoda2c --sizes S M --map-seeds 5000 5001 \\
+        --out results/first_try/rows.csv
+    python scripts/bench_first_try.py --table results/first_try/rows.csv
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import platform
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from twodrl_bench.intervals import wilson
+from twodrl_zoo.hyperparams import task_facts
+from twodrl_zoo.recipe import size_class
+
+FIELDS = (
+    "map", "size", "moves", "algo", "seed", "goal_rate", "learned", "stopped_learned", "kept_at", "steps", "budget",
+    "train_s", "wall_s", "commit", "cpu",
+)  # fmt: skip
+LINE = re.compile(r"goal rate (\d\.\d\d) \((\d+) of (\d+)")
+
+
+def run(algo: str, map_: str, commit: str, cpu: str) -> dict[str, object]:
+    """One run of the command on ``map_`` (``"office"``: the paper's office, no ``--env-kwargs``)."""
+    command = ["sb3-twodrl-train", "--algo", algo, "--env", "NomadOffice-v0"]
+    if map_ != "office":
+        command += ["--env-kwargs", f'map:"{map_}"']
+    with tempfile.TemporaryDirectory() as folder:
+        clock = time.perf_counter()
+        done = subprocess.run(command, cwd=folder, capture_output=True, text=True, env={**os.environ})
+        wall = time.perf_counter() - clock
+        (record_file,) = Path(folder).glob("logs/*/*/goal_checks.json") or [None]
+        if done.returncode != 0 or record_file is None:
+            raise RuntimeError(f"{' '.join(command)} failed:\n{done.stdout[-2000:]}\n{done.stderr[-2000:]}")
+        record = json.loads(record_file.read_text())
+    seed = int(re.search(r"^Seed: (\d+)$", done.stdout, re.MULTILINE).group(1))  # type: ignore[union-attr]
+    rate = float(LINE.search(done.stdout).group(1))  # type: ignore[union-attr]
+    facts = task_facts("NomadOffice-v0", {} if map_ == "office" else {"map": map_})
+    moves = 17 if facts is None else facts["shortest_path"]
+    return {
+        "map": map_,
+        "size": "paper" if facts is None else size_class(moves),
+        "moves": moves,
+        "algo": algo,
+        "seed": seed,
+        "goal_rate": rate,
+        "learned": rate >= 0.8,
+        "stopped_learned": record["learned_at"] is not None,
+        "kept_at": record["kept"]["timesteps"] if record["kept"] else "",
+        "steps": record["num_timesteps"],
+        "budget": record["n_timesteps"],
+        "train_s": record["train_s"],
+        "wall_s": round(wall, 1),
+        "commit": commit,
+        "cpu": cpu,
+    }
+
+
+def table(rows: list[dict[str, str]]) -> str:
+    """Per size and algorithm: offices at goal rate >= 0.8 (95% Wilson interval), wall seconds median and max."""
+    lines = [
+        "| size | algo | offices at >= 0.8 | share | 95% interval | stopped as learned | wall s, median (max) |",
+        "| --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    for size in ("paper", "S", "M", "S+M", "L"):
+        for algo in sorted({r["algo"] for r in rows}, reverse=True):
+            group = [
+                r for r in rows if r["algo"] == algo and (r["size"] == size or (size == "S+M" and r["size"] in "SM"))
+            ]
+            if not group:
+                continue
+            good = sum(r["learned"] == "True" for r in group)
+            low, high = wilson(good, len(group))
+            stopped = sum(r["stopped_learned"] == "True" for r in group)
+            wall = sorted(float(r["wall_s"]) for r in group)
+            lines.append(
+                f"| {size} | {algo} | {good}/{len(group)} | {good / len(group):.2f} | [{low:.2f}, {high:.2f}] | "
+                f"{stopped}/{len(group)} | {np.median(wall):.0f} ({wall[-1]:.0f}) |"
+            )
+    lines += ["", "| map | moves | algo | seed | goal rate | kept at | steps | budget | wall s |", "|" + " --- |" * 9]
+    for r in sorted(rows, key=lambda r: (int(r["moves"]), r["map"], r["algo"])):
+        lines.append(
+            f"| {r['map']} | {r['moves']} | {r['algo']} | {r['seed']} | {float(r['goal_rate']):.2f} | {r['kept_at']} | "
+            f"{r['steps']} | {r['budget']} | {r['wall_s']} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--maps", nargs="*", default=[], help="maps as the env takes them ('office': the paper's)")
+    parser.add_argument("--sizes", nargs="*", default=[], help="size classes of generated maps (S, M, L)")
+    parser.add_argument("--map-seeds", nargs="*", type=int, default=[], help="generated map seeds")
+    parser.add_argument("--algos", nargs="+", default=["twoda2c"])
+    parser.add_argument("--out", type=Path, help="CSV to append rows to")
+    parser.add_argument("--table", type=Path, help="print the table of a rows CSV and exit")
+    args = parser.parse_args()
+    if args.table is not None:
+        with args.table.open(newline="") as f:
+            print(table(list(csv.DictReader(f))), end="")
+        return
+    maps = list(args.maps) + [f"generated:{s}:{seed}" for seed in args.map_seeds for s in args.sizes]
+    done = set()
+    if args.out.exists():
+        with args.out.open(newline="") as f:
+            done = {(r["map"], r["algo"]) for r in csv.DictReader(f)}
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
+    cpu = next((line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo") if "model name" in line), "")
+    cpu = cpu or platform.processor()
+    for map_ in maps:
+        for algo in args.algos:
+            if (map_, algo) in done:
+                continue
+            row = run(algo, map_, commit, cpu)
+            print(" | ".join(str(row[f]) for f in FIELDS), flush=True)
+            new = not args.out.exists()
+            with args.out.open("a", newline="") as f:
+                writer = csv.DictWriter(f, fieldnames=FIELDS)
+                if new:
+                    writer.writeheader()
+                writer.writerow(row)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
