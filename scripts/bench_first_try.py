@@ -10,8 +10,8 @@ output: the goal rate of its 20 deterministic test episodes from the map's start
 algorithm already there are skipped: the run resumes); ``--table`` prints the table of a rows file.
 
     OMP_NUM_THREADS=1 python scripts/bench_first_try.py --algos twoda2c --sizes S M --map-seeds 5000 5001 \\
-        --out results/first_try/rows.csv
-    python scripts/bench_first_try.py --table results/first_try/rows.csv
+        --out results/first_try/rows_twoda2c.csv
+    python scripts/bench_first_try.py --table results/first_try/rows_*.csv
 """
 
 from __future__ import annotations
@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+import twodrl_envs  # noqa: F401  (registers NomadOffice-v0, for its task facts)
 from twodrl_bench.intervals import wilson
 from twodrl_zoo.hyperparams import task_facts
 from twodrl_zoo.recipe import size_class
@@ -114,11 +115,14 @@ def main() -> None:
     parser.add_argument("--map-seeds", nargs="*", type=int, default=[], help="generated map seeds")
     parser.add_argument("--algos", nargs="+", default=["twoda2c"])
     parser.add_argument("--out", type=Path, help="CSV to append rows to")
-    parser.add_argument("--table", type=Path, help="print the table of a rows CSV and exit")
+    parser.add_argument("--table", type=Path, nargs="+", help="print the table of rows CSVs and exit")
     args = parser.parse_args()
     if args.table is not None:
-        with args.table.open(newline="") as f:
-            print(table(list(csv.DictReader(f))), end="")
+        rows = []
+        for path in args.table:
+            with path.open(newline="") as f:
+                rows += list(csv.DictReader(f))
+        print(table(rows), end="")
         return
     maps = list(args.maps) + [f"generated:{s}:{seed}" for seed in args.map_seeds for s in args.sizes]
     done = set()
