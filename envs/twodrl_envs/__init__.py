@@ -6,13 +6,17 @@ Importing this package registers:
 * ``NomadOfficeReal-v0``: the same office on a stand-in for the physical robot (``twodrl_envs.nomad.realistic``:
   specular sonar, ringing, cross-talk, surface-dependent infrared, drifting odometry);
 * ``NomadOfficeMemorable-v0``: the same task replayed from a recorded sensor database (MEMORABLE);
+* ``NomadOfficeMuJoCo-v0``: the same office on a physics stand-in (``twodrl_envs.nomad.physics``: the robot's
+  mass, acceleration and contacts in MuJoCo, sensors as ray casts; needs ``pip install "sb3-twodrl[mujoco]"``);
+  registered without a ``vector_entry_point`` (one physics robot per env: ``gym.make_vec`` and SB3 step copies
+  of it);
 * ``NomadOfficeOpen-v0`` / ``NomadOfficeRealOpen-v0`` / ``NomadOfficeMemorableOpen-v0``: the three on the open
   office (start, gap and goal in one line: no dilemma; ``map="open"``, which any of the IDs also
   takes), kept so results can be shown on both maps.
 
 Every ID takes ``map=``: a built-in map (``"office"``, ``"open"``, ``"corridor"``: one route, no route
 regions), a map file (docs/own_office.md) or a generated office (``"generated:SIZE:SEED"``,
-``twodrl_envs.nomad.generator``). Every ID has a ``vector_entry_point``, its batched env
+``twodrl_envs.nomad.generator``). Every ID but ``NomadOfficeMuJoCo-v0`` has a ``vector_entry_point``, its batched env
 (``gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point", **options)``), which takes every
 option of ``gym.make(id, **options)``: sub-env ``i`` behaves exactly like ``gym.make(id, **options)`` (tested).
 
@@ -54,6 +58,12 @@ for name, (entry_point, vector_entry_point) in NOMAD_ENVS.items():
             max_episode_steps=MAX_EPISODE_STEPS,
             kwargs=dict(kwargs),
         )
+
+register(
+    id="NomadOfficeMuJoCo-v0",
+    entry_point="twodrl_envs.nomad.physics:NomadOfficeMuJoCoEnv",
+    max_episode_steps=MAX_EPISODE_STEPS,
+)
 
 for env_id, maker in (
     ("LunarLanderSplit-v3", "make_lunar_lander"),
