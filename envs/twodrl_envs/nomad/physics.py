@@ -99,6 +99,14 @@ def office_mjcf(office: OfficeMap) -> str:
             f'<geom name="skin{i}" type="capsule" group="3" conaffinity="1" size="{_m(SKIN_CM)}"'
             f' fromto="{_m(ax)} {_m(ay)} {z} {_m(bx)} {_m(by)} {z}" rgba="1 0 0 0"/>'
         )
+    regions = []
+    for name, rgba in (("goal", ".2 .75 .3 .6"), ("shortcut", ".95 .75 .2 .35"), ("detour", ".3 .5 .95 .35")):
+        if name in office.regions:
+            rx0, ry0, rx1, ry1 = office.regions[name]
+            regions.append(
+                f'<geom name="{name}" type="box" group="2" pos="{_m((rx0 + rx1) / 2)} {_m((ry0 + ry1) / 2)} 0.001"'
+                f' size="{_m((rx1 - rx0) / 2)} {_m((ry1 - ry0) / 2)} 0.001" rgba="{rgba}"/>'
+            )
     return f"""<mujoco model="{office.name}">
   <compiler angle="radian"/>
   <option timestep="{TIMESTEP_S}" integrator="implicitfast" gravity="0 0 0"/>
@@ -107,6 +115,7 @@ def office_mjcf(office: OfficeMap) -> str:
     <light pos="{_m((x0 + x1) / 2)} {_m((y0 + y1) / 2)} 5" dir="0 0 -1" directional="true"/>
     <geom name="floor" type="plane" group="2" pos="{_m((x0 + x1) / 2)} {_m((y0 + y1) / 2)} 0"
       size="{_m((x1 - x0) / 2 + 50)} {_m((y1 - y0) / 2 + 50)} 0.1" rgba=".92 .9 .85 1"/>
+    {"".join(regions)}
     {"".join(walls)}
     {"".join(skins)}
     <body name="robot" pos="0 0 0">
@@ -269,25 +278,27 @@ class MuJoCoRobot(Robot):
         ``heading`` radians counter-clockwise. One list entry per sensor."""
         mujoco, m, d = self._mj, self.mjmodel, self.data
         bearings = BEARINGS - heading
-        centre = np.asarray(xy, dtype=np.float64) / 100.0
-        z = SENSOR_HEIGHT_CM / 100.0
-        radius = ROBOT_RADIUS_CM / 100.0
-        ranges, walls = [], []
-        for s in range(N_SONAR):
-            angles = bearings[s] + offsets[s]
-            k = len(angles)
-            dirs = np.zeros((k, 3))
-            dirs[:, 0], dirs[:, 1] = np.sin(angles), np.cos(angles)
-            origin = np.array([centre[0] + radius * np.sin(bearings[s]), centre[1] + radius * np.cos(bearings[s]), z])
-            dist = np.empty(k)
-            geom = np.empty(k, dtype=np.int32)
+        counts = [len(o) for o in offsets]
+        ends = np.cumsum(counts)
+        angles = np.repeat(bearings, counts) + np.concatenate(list(offsets))
+        dirs = np.zeros((len(angles), 3))
+        dirs[:, 0], dirs[:, 1] = np.sin(angles), np.cos(angles)
+        origins = np.empty((N_SONAR, 3))
+        origins[:, 0] = (xy[0] + ROBOT_RADIUS_CM * np.sin(bearings)) / 100.0
+        origins[:, 1] = (xy[1] + ROBOT_RADIUS_CM * np.cos(bearings)) / 100.0
+        origins[:, 2] = SENSOR_HEIGHT_CM / 100.0
+        dist = np.empty(len(angles))
+        geom = np.empty(len(angles), dtype=np.int32)
+        flat = dirs.ravel()
+        for s, (start, end) in enumerate(zip(ends - counts, ends, strict=True)):
             mujoco.mj_multiRay(
-                m, d, origin, dirs.ravel(), self._groups, 1, self._body, geom, dist, None, k, _CUTOFF_CM / 100
-            )
-            hit = dist >= 0.0
-            ranges.append(np.where(hit, dist * 100.0, np.inf))
-            walls.append(np.where(hit, self._wall_of_geom[geom], -1))
-        return ranges, walls
+                m, d, origins[s], flat[3 * start : 3 * end], self._groups, 1, self._body,
+                geom[start:end], dist[start:end], None, end - start, _CUTOFF_CM / 100,
+            )  # fmt: skip
+        hit = dist >= 0.0
+        ranges = np.where(hit, dist * 100.0, np.inf)
+        walls = np.where(hit, self._wall_of_geom[geom], -1)
+        return np.split(ranges, ends[:-1]), np.split(walls, ends[:-1])
 
     def cone_offsets(self, xy: np.ndarray, heading: float = 0.0) -> list[np.ndarray]:
         """Per sensor, the ray offsets (radians) of its ideal sonar cone: a fan of :data:`CONE_RAYS` rays (the axis
