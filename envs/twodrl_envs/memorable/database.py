@@ -198,7 +198,11 @@ def load_database(path: str | Path | None = None, core: OfficeCore | None = None
     path = default_database_path(None if core is None else core.office.source) if path is None else Path(path)
     name = str(path)
     if not path.is_file():
-        raise ValueError(f"database file {name} does not exist")
+        where = "" if core is None else f" --map {core.office.source}"
+        raise ValueError(
+            f"database file {path.resolve()} does not exist: record one with "
+            f"`sb3-twodrl-record-database{where} --out {path}`"
+        )
     with path.open("rb") as fh:
         magic = fh.read(4)
     if magic != b"PK\x03\x04":
@@ -258,11 +262,9 @@ def import_csv(
     """
     path = Path(path)
     name = str(path)
-    core = office_core(map)
-    lat = core.lattice
     if not path.is_file():
         raise ValueError(f"CSV log {name} does not exist")
-    per_cell: dict[int, list[np.ndarray]] = {}
+    rows, labels = [], []
     with path.open(newline="") as fh:
         reader = csv.DictReader(fh)
         header = [h.strip() for h in (reader.fieldnames or [])]
@@ -277,46 +279,99 @@ def import_csv(
                 raise ValueError(f"CSV log {name} line {line}: non-numeric or missing value ({err})") from err
             if not np.all(np.isfinite(values)):
                 raise ValueError(f"CSV log {name} line {line}: non-finite value")
-            xy, reading = values[:2], values[2:]
-            out = (reading < LOW_CM) | (reading > HIGH_CM)
-            if out.any():
-                col = int(np.flatnonzero(out)[0])
-                raise ValueError(
-                    f"CSV log {name} line {line}: {SENSOR_COLUMNS[col]} = {reading[col]} is outside the "
-                    f"sensor's range {LOW_CM[col]}-{HIGH_CM[col]} cm"
-                )
-            if not core.office.inside_bounds(xy):
-                raise ValueError(f"CSV log {name} line {line}: position {_xy(xy)} is off the map {core.office.bounds}")
-            grid = np.round((xy - lat.origin) / STEP_CM)
-            snapped = lat.origin + grid * STEP_CM
-            if np.any(np.abs(xy - snapped) > tolerance_cm):
-                raise ValueError(f"CSV log {name} line {line}: position {_xy(xy)} is off the 10 cm lattice")
-            cell = lat.index(snapped)
-            if cell < 0:
-                raise ValueError(
-                    f"CSV log {name} line {line}: position {_xy(xy)} (cell {_xy(snapped)}) is not free "
-                    f"space for a {2 * ROBOT_RADIUS_CM:.0f} cm robot on map {core.office.source}"
-                )
-            per_cell.setdefault(cell, []).append(reading)
-    if not per_cell:
-        raise ValueError(f"CSV log {name}: no readings")
+            rows.append(values)
+            labels.append(f"CSV log {name} line {line}")
+    recording = {
+        "source": "csv",
+        "file": path.name,
+        "how": "imported from a CSV log of robot readings, positions snapped to the 10 cm lattice",
+    }
+    table = np.array(rows).reshape(-1, len(CSV_COLUMNS))
+    return import_readings(
+        table[:, :2],
+        table[:, 2:],
+        map=map,
+        source=f"CSV log {name}",
+        labels=labels,
+        recording=recording,
+        require_all_cells=require_all_cells,
+        tolerance_cm=tolerance_cm,
+    )
+
+
+def import_readings(
+    positions_cm: np.ndarray,
+    ranges_cm: np.ndarray,
+    *,
+    map: str | Path | None = None,
+    source: str = "log",
+    labels: list[str] | None = None,
+    recording: dict[str, Any] | None = None,
+    require_all_cells: bool = True,
+    tolerance_cm: float = 5.0,
+    per_cell: int | None = None,
+) -> SensorDatabase:
+    """Build a database from a robot's readings ``(n, 32)`` (cm, sensor order of :data:`SENSOR_COLUMNS`) and the
+    positions ``(n, 2)`` (cm, the map's frame) they were taken at: what every import (:func:`import_csv`, a ROS 2
+    bag) reduces its log to.
+
+    Each position is snapped to the nearest lattice cell (within ``tolerance_cm`` per axis); ``per_cell`` keeps a
+    cell's first readings only. ``ValueError`` names ``source`` and the reading (``labels[i]``, default
+    ``"{source} reading {i}"``) for an out-of-range value, a position off the map, off the lattice or in a wall;
+    with ``require_all_cells``, for reachable cells without readings (listed). ``recording`` goes into the
+    metadata, with the counts.
+    """
+    positions_cm = np.asarray(positions_cm, dtype=np.float64)
+    ranges_cm = np.asarray(ranges_cm, dtype=np.float64)
+    if positions_cm.ndim != 2 or positions_cm.shape[1] != 2 or ranges_cm.shape != (len(positions_cm), 32):
+        raise ValueError(
+            f"positions_cm must be (n, 2) and ranges_cm (n, 32), got {positions_cm.shape} and {ranges_cm.shape}"
+        )
+    if per_cell is not None and (isinstance(per_cell, bool) or not isinstance(per_cell, int) or per_cell < 1):
+        raise ValueError(f"per_cell must be a positive int or None, got {per_cell!r}")
+    if labels is None:
+        labels = [f"{source} reading {i}" for i in range(len(positions_cm))]
+    core = office_core(map)
+    lat = core.lattice
+    per: dict[int, list[np.ndarray]] = {}
+    for label, xy, reading in zip(labels, positions_cm, ranges_cm, strict=True):
+        if not np.all(np.isfinite(xy)) or not np.all(np.isfinite(reading)):
+            raise ValueError(f"{label}: non-finite value")
+        out = (reading < LOW_CM) | (reading > HIGH_CM)
+        if out.any():
+            col = int(np.flatnonzero(out)[0])
+            raise ValueError(
+                f"{label}: {SENSOR_COLUMNS[col]} = {reading[col]} is outside the "
+                f"sensor's range {LOW_CM[col]}-{HIGH_CM[col]} cm"
+            )
+        if not core.office.inside_bounds(xy):
+            raise ValueError(f"{label}: position {_xy(xy)} is off the map {core.office.bounds}")
+        grid = np.round((xy - lat.origin) / STEP_CM)
+        snapped = lat.origin + grid * STEP_CM
+        if np.any(np.abs(xy - snapped) > tolerance_cm):
+            raise ValueError(f"{label}: position {_xy(xy)} is off the 10 cm lattice")
+        cell = lat.index(snapped)
+        if cell < 0:
+            raise ValueError(
+                f"{label}: position {_xy(xy)} (cell {_xy(snapped)}) is not free "
+                f"space for a {2 * ROBOT_RADIUS_CM:.0f} cm robot on map {core.office.source}"
+            )
+        kept = per.setdefault(cell, [])
+        if per_cell is None or len(kept) < per_cell:
+            kept.append(reading)
+    if not per:
+        raise ValueError(f"{source}: no readings")
     counts = np.zeros(len(lat.cells), dtype=np.int64)
-    for cell, rows in per_cell.items():
+    for cell, rows in per.items():
         counts[cell] = len(rows)
     if require_all_cells:
         missing_cells = np.flatnonzero(lat.reachable & (counts == 0))
         if len(missing_cells):
             shown = ", ".join(_xy(lat.cells[c]) for c in missing_cells[:5])
             raise ValueError(
-                f"CSV log {name}: {len(missing_cells)} reachable cells have no readings (e.g. {shown}); "
+                f"{source}: {len(missing_cells)} reachable cells have no readings (e.g. {shown}); "
                 "record them or pass require_all_cells=False (unrecorded cells then count as obstacles)"
             )
-    ranges = np.concatenate([np.array(per_cell[c]) for c in sorted(per_cell)], axis=0)
-    recording = {
-        "source": "csv",
-        "file": path.name,
-        "rows": int(counts.sum()),
-        "cells_recorded": int((counts > 0).sum()),
-        "how": "imported from a CSV log of robot readings, positions snapped to the 10 cm lattice",
-    }
+    ranges = np.concatenate([np.array(per[c]) for c in sorted(per)], axis=0)
+    recording = {**(recording or {}), "rows": int(counts.sum()), "cells_recorded": int((counts > 0).sum())}
     return SensorDatabase(lat.cells.copy(), counts, ranges, database_metadata(core, recording))
