@@ -20,7 +20,16 @@ import runpy
 import sys
 from typing import Any
 
-__all__ = ["RENDER_MODULE", "ZOO_MODULES", "check_command_line", "enjoy", "report_goal_rate", "require_extra", "train"]
+__all__ = [
+    "RENDER_MODULE",
+    "ZOO_MODULES",
+    "check_command_line",
+    "enjoy",
+    "replay_options",
+    "report_goal_rate",
+    "require_extra",
+    "train",
+]
 
 ZOO_MODULES = ("rl_zoo3", "optuna", "pandas", "requests")
 """What the ``zoo`` extra installs and the commands import (rl-zoo3's enjoy imports ``requests`` undeclared)."""
@@ -167,6 +176,8 @@ def report_goal_rate(argv: list[str], given: dict[str, dict[str, Any]], episodes
 def enjoy(argv: list[str] | None = None) -> None:
     """``sb3-twodrl-enjoy``: rl-zoo3's ``enjoy`` (``-f`` defaults to ``logs``, train's folder).
 
+    It replays as the train command tests: with the test options of the run's task (:func:`replay_options`: a map's
+    start and its time limit, not the training options), under what ``--env-kwargs`` gives.
     ``--record -o videos`` records a video instead (rl-zoo3's ``record_video``, needs ``moviepy``; the env must
     support ``render_mode="rgb_array"``). Without ``pygame`` it replays headless (``--no-render``) and says how to
     get the window.
@@ -177,6 +188,8 @@ def enjoy(argv: list[str] | None = None) -> None:
     argv = prepare_zoo_argv(sys.argv[1:] if argv is None else argv)
     if not _has_option(argv, "-f", "--folder"):
         argv += ["-f", "logs"]
+    check_command_line("sb3-twodrl-enjoy", argv)
+    argv = replay_options(argv)
     if "--record" in argv:
         try:
             importlib.import_module("moviepy")
@@ -198,6 +211,39 @@ def enjoy(argv: list[str] | None = None) -> None:
     if not _has_option(argv, "--num-threads"):
         argv += ["--num-threads", "1"]
     run_zoo_entry("sb3-twodrl-enjoy", argv, zoo_enjoy)
+
+
+def replay_options(argv: list[str]) -> list[str]:
+    """``argv`` of an enjoy command with ``--env-kwargs`` holding the test options of the run's task: those
+    :func:`twodrl_zoo.hyperparams.resolve` gives the training options saved in the run's ``args.yml``, under the
+    ones ``argv`` gives. Unchanged where the run or its ``args.yml`` is not found (rl-zoo3 then says so)."""
+    import os
+
+    import yaml
+    from rl_zoo3.utils import get_latest_run_id
+
+    from twodrl_zoo.hyperparams import derived_settings, resolve
+    from twodrl_zoo.zoo import _dict_options, _option_value
+
+    algo, env_id = _option_value(argv, "--algo"), _option_value(argv, "--env")
+    folder = _option_value(argv, "-f", "--folder") or "logs"
+    if algo is None or env_id is None:
+        return argv
+    exp_id = int(_option_value(argv, "--exp-id") or 0) or get_latest_run_id(os.path.join(folder, algo), env_id)
+    args_file = os.path.join(folder, algo, f"{env_id}_{exp_id}", env_id, "args.yml")
+    if not os.path.isfile(args_file):
+        return argv
+    with open(args_file) as f:
+        trained = (yaml.load(f, Loader=yaml.UnsafeLoader) or {}).get("env_kwargs") or {}
+    rest, given = _dict_options(argv)
+    test = resolve({}, derived_settings(env_id, trained), env_kwargs=trained).eval_env_kwargs
+    options = {**test, **given["--env-kwargs"]}
+    if not options:
+        return argv
+    for option in ("--eval-env-kwargs", "--hyperparams"):
+        if given[option]:
+            rest += [option, *(f"{key}:{value!r}" for key, value in given[option].items())]
+    return [*rest, "--env-kwargs", *(f"{key}:{value!r}" for key, value in options.items())]
 
 
 def _import_gym_packages(argv: list[str]) -> list[str]:

@@ -43,12 +43,12 @@ class VectorEnvAdapter(VecEnv):
 
     def reset(self) -> np.ndarray:
         seed = None if self._seeds[0] is None else list(self._seeds)
-        obs, _ = self.venv.reset(seed=seed)
+        obs, _ = self.venv.reset(seed=seed)  # type: ignore[arg-type]  # a seed per sub-env, as gymnasium takes
         self._reset_seeds()
         return obs
 
     def step_async(self, actions: np.ndarray) -> None:
-        self._actions = np.asarray(actions).reshape((self.num_envs, *self.action_space.shape))
+        self._actions = np.asarray(actions).reshape((self.num_envs, *(self.action_space.shape or ())))
 
     def step_wait(self) -> VecEnvStepReturn:
         obs, rewards, terminated, truncated, info = self.venv.step(self._actions)
@@ -75,7 +75,7 @@ class VectorEnvAdapter(VecEnv):
         self.venv.close()
 
     def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
-        return [getattr(self.venv, attr_name)] * len(self._get_indices(indices))
+        return [getattr(self.venv, attr_name)] * len(list(self._get_indices(indices)))
 
     def set_attr(self, attr_name: str, value: Any, indices: Any = None) -> None:
         setattr(self.venv, attr_name, value)
@@ -84,7 +84,7 @@ class VectorEnvAdapter(VecEnv):
         raise NotImplementedError(f"{type(self.venv).__name__} is one batched env: it has no per-env methods")
 
     def env_is_wrapped(self, wrapper_class: type, indices: Any = None) -> list[bool]:
-        return [False] * len(self._get_indices(indices))
+        return [False] * len(list(self._get_indices(indices)))
 
 
 def has_batched_env(env_id: str) -> bool:

@@ -1,0 +1,69 @@
+"""The train and enjoy commands: one-line errors for what would fail deep in rl-zoo3; enjoy replays from the start."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import yaml
+
+pytest.importorskip("rl_zoo3")
+
+import twodrl_envs  # noqa: F401  (registers the Nomad IDs)
+from twodrl_zoo.cli import check_command_line, replay_options
+from twodrl_zoo.hyperparams import derived_settings, read_entry, resolve
+from twodrl_zoo.zoo import _dict_options
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--env", "NomadOfice-v0"], "env 'NomadOfice-v0' is not registered; did you mean 'NomadOffice-v0'?"),
+        (["--env", "NomadOffice-v0", "--env-kwargs", "map:three_rooms.json"], """map:'"my_office.json"'"""),
+        (["--env", "NomadOffice-v0", "--env-kwargs", "map:'nope.json'"], "nope.json does not exist"),
+        (
+            ["--env", "NomadOfficeMemorable-v0", "--env-kwargs", "database:'gone.npz'"],
+            f"{Path('gone.npz').resolve()} does not exist: record one with `sb3-twodrl-record-database",
+        ),
+    ],
+)
+def test_a_bad_command_line_exits_with_one_line_naming_it(argv: list[str], message: str) -> None:
+    with pytest.raises(SystemExit) as stop:
+        check_command_line("sb3-twodrl-train", ["--algo", "twoda2c", *argv])
+    text = str(stop.value.code)
+    assert text.startswith("sb3-twodrl-train: ") and message in text and "\n" not in text
+
+
+def _run_folder(root: Path, env_kwargs: dict) -> None:
+    folder = root / "logs" / "twoda2c" / "NomadOffice-v0_1" / "NomadOffice-v0"
+    folder.mkdir(parents=True)
+    (folder / "args.yml").write_text(yaml.dump({"env_kwargs": env_kwargs}))
+
+
+def test_enjoy_replays_with_the_task_s_test_options_under_the_user_s(tmp_path: Path) -> None:
+    _run_folder(tmp_path, {"map": "generated:S:3"})
+    argv = ["--algo", "twoda2c", "--env", "NomadOffice-v0", "-f", str(tmp_path / "logs")]
+    derived = derived_settings("NomadOffice-v0", {"map": "generated:S:3"})
+    assert derived is not None and derived.env_kwargs["starts"] == "uniform"  # what training used
+    _, given = _dict_options(replay_options(argv))
+    assert given["--env-kwargs"] == {"map": "generated:S:3", **derived.eval_env_kwargs}
+    assert given["--env-kwargs"]["starts"] == "map"
+    _, given = _dict_options(replay_options([*argv, "--env-kwargs", "max_episode_steps:50"]))
+    assert given["--env-kwargs"] == {"map": "generated:S:3", "starts": "map", "max_episode_steps": 50}
+
+
+def test_enjoy_leaves_a_run_of_the_paper_s_office_as_trained(tmp_path: Path) -> None:
+    _run_folder(tmp_path, {})
+    argv = ["--algo", "twoda2c", "--env", "NomadOffice-v0", "-f", str(tmp_path / "logs")]
+    assert replay_options(argv) == argv
+
+
+def test_one_precedence_the_written_entry_the_task_the_user() -> None:
+    entry = {**read_entry(Path("twodrl_zoo/hyperparams/twoda2c.yml"), "NomadOffice-v0"), "env_kwargs": {"a": 1}}
+    derived = derived_settings("NomadOffice-v0", {"map": "generated:L:3"})
+    assert derived is not None
+    resolved = resolve(entry, derived, {"gamma": 0.5}, {"map": "generated:L:3", "starts": "map"}, {"b": 2})
+    assert resolved.entry["gamma"] == 0.5 and resolved.entry["ent_coef"] == derived.hyperparams["ent_coef"] != 0.05
+    assert resolved.entry["n_envs"] == 64 and resolved.entry["env_kwargs"] == resolved.env_kwargs
+    assert resolved.env_kwargs == {"a": 1, **derived.env_kwargs, "map": "generated:L:3", "starts": "map"}
+    assert resolved.eval_env_kwargs == {"a": 1, "map": "generated:L:3", **derived.eval_env_kwargs, "b": 2}
