@@ -1,16 +1,17 @@
-"""``sb3-twodrl-record-database``: check a map and record its MEMORABLE sensor database.
+"""sb3-twodrl-record-database: check a map and record its MEMORABLE sensor database.
 
-A virtual robot visits every cell of the office reachable from the start. ``--model realistic``
-(default): the stand-in robot of ``NomadOfficeReal-v0`` drives to each cell by dead reckoning,
-K times, and files each reading (16 sonar, 16 IR) under its odometry's cell, as a real robot
-would. ``--model noise``: placed exactly on each cell, K noisy ideal readings; ``--model ideal``:
-exact. A user with a real robot imports their log instead (``--from-csv log.csv``).
-``--check`` only loads and checks the map (``ValueError`` messages of
-:func:`twodrl_envs.nomad.office.office_core`) and prints what the robot sees of it.
+A virtual robot visits every cell of the office reachable from the start. --model realistic (default): the
+stand-in robot of NomadOfficeReal-v0 drives to each cell by dead reckoning, K times, and files each reading
+(16 sonar, 16 IR) under its odometry's cell, as a real robot would. --model noise: placed exactly on each cell,
+K noisy ideal readings; --model ideal: exact. A user with a real robot imports their log instead: a CSV file
+(--from-csv log.csv) or a ROS 2 bag (--from-bag BAG, needs pip install "sb3-twodrl[ros]"; its topics named by
+--sonar-topic, --ir-topic, --odom-topic, --pose-topic). --check only loads and checks the map and prints what
+the robot sees of it.
 
     sb3-twodrl-record-database --map my_office.json --check
     sb3-twodrl-record-database --map my_office.json --out my_office_k8.npz
     sb3-twodrl-record-database --map my_office.json --from-csv robot_log.csv --out my_robot.npz
+    sb3-twodrl-record-database --map my_office.json --from-bag robot_bag --out my_robot.npz
 """
 
 from __future__ import annotations
@@ -18,11 +19,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+import numpy as np
+
+from twodrl_envs.analysis.bags import IR_TOPIC, ODOMETRY_TOPIC, POSE_FRAMES, SONAR_TOPIC, import_bag
 from twodrl_envs.analysis.dilemma import distance_to_goal
 from twodrl_envs.analysis.recording import record_database
 from twodrl_envs.memorable.database import import_csv, load_database, save_database
 from twodrl_envs.nomad.core import OfficeCore, office_core
-from twodrl_envs.nomad.geometry import SHIPPED_MAPS, OfficeMap
+from twodrl_envs.nomad.geometry import SHIPPED_MAPS, OfficeMap, map_data
 from twodrl_envs.nomad.realistic import RealisticModel
 from twodrl_envs.nomad.sensors import NoiseModel
 
@@ -33,16 +37,48 @@ def _rect(office: OfficeMap, name: str) -> str:
     return "[" + ", ".join(f"{v:g}" for v in office.regions[name]) + "]"
 
 
+def in_obstacles(core: OfficeCore) -> np.ndarray:
+    """Which lattice cells ``(n_cells,)`` lie inside one of the map's obstacle polygons (even-odd rule).
+
+    The lattice keeps every point whose disc clears the walls, so the middle of an obstacle wider than the robot
+    is a lattice cell; no move reaches it.
+    """
+    xy = core.lattice.cells
+    inside = np.zeros(len(xy), dtype=bool)
+    for polygon in map_data(core.office.source).get("obstacles", []):
+        vertices = np.asarray(polygon, dtype=np.float64)
+        crossings = np.zeros(len(xy), dtype=bool)
+        for (ax, ay), (bx, by) in zip(vertices, np.roll(vertices, -1, axis=0), strict=True):
+            straddles = (ay > xy[:, 1]) != (by > xy[:, 1])
+            with np.errstate(divide="ignore", invalid="ignore"):
+                x_cross = ax + (xy[:, 1] - ay) * (bx - ax) / (by - ay)
+            crossings ^= straddles & (xy[:, 0] < x_cross)
+        inside |= crossings
+    return inside
+
+
 def describe_map(core: OfficeCore) -> str:
-    """A few lines on a checked map: size, start, lattice cells, goal, shortest path, route regions."""
+    """A few lines on a checked map: size, start, lattice cells, goal, shortest path, route regions.
+
+    Lattice points inside obstacles are not counted as free cells (they are reported apart); the free cells that
+    the start cannot reach are walled off from it.
+    """
     office, lattice = core.office, core.lattice
     x0, y0, x1, y1 = office.bounds
     moves = distance_to_goal(core)[core.start_cell]
+    inside = in_obstacles(core)
+    free = int((~inside).sum())
+    reachable = int((lattice.reachable & ~inside).sum())
+    counts = f"  {free} free lattice cells, {reachable} reachable from the start"
+    if free > reachable:
+        counts += f" ({free - reachable} walled off from it)"
+    if inside.any():
+        counts += f"; {int(inside.sum())} more lattice points lie inside obstacles"
     lines = [
         f"map {office.name!r} ({office.source}): OK",
         f"  {x1 - x0:g} x {y1 - y0:g} cm, start ({office.start[0]:g}, {office.start[1]:g}), "
         f"{len(office.walls)} wall segments",
-        f"  {len(lattice.cells)} free lattice cells, {int(lattice.reachable.sum())} reachable from the start",
+        counts,
         f"  goal {_rect(office, 'goal')}: {int((core.goal & lattice.reachable).sum())} reachable cells, "
         f"shortest path {moves:.0f} moves",
     ]
@@ -66,7 +102,12 @@ def main(argv: list[str] | None = None) -> None:
     )
     parser.add_argument("--check", action="store_true", help="check the map and describe it; record nothing")
     parser.add_argument("--out", type=Path, default=None, help="output .npz (required unless --check)")
-    parser.add_argument("--k", type=int, default=8, help="readings per cell (default 8)")
+    parser.add_argument(
+        "--k",
+        type=int,
+        default=None,
+        help="readings per cell: recorded (default 8); imported: keep each cell's first K (default all)",
+    )
     parser.add_argument("--seed", type=int, default=0, help="noise seed of the recording (default 0)")
     parser.add_argument(
         "--model",
@@ -75,7 +116,33 @@ def main(argv: list[str] | None = None) -> None:
         help="realistic: the stand-in robot driving by dead reckoning (default); noise: noisy ideal; ideal: exact",
     )
     parser.add_argument("--from-csv", type=Path, default=None, help="import a CSV log instead of recording")
-    parser.add_argument("--allow-missing", action="store_true", help="CSV: allow reachable cells without readings")
+    parser.add_argument("--from-bag", type=Path, default=None, help="import a ROS 2 bag (folder or file) instead")
+    parser.add_argument(
+        "--sonar-topic",
+        default=SONAR_TOPIC,
+        help="bag: sonar topics, a pattern with {i} (16 sensor_msgs/msg/Range topics) or one LaserScan topic "
+        f"(default {SONAR_TOPIC})",
+    )
+    parser.add_argument(
+        "--ir-topic", default=IR_TOPIC, help=f"bag: infrared topics, as --sonar-topic (default {IR_TOPIC})"
+    )
+    parser.add_argument(
+        "--odom-topic", default=ODOMETRY_TOPIC, help=f"bag: the nav_msgs/msg/Odometry topic (default {ODOMETRY_TOPIC})"
+    )
+    parser.add_argument(
+        "--pose-topic",
+        default=None,
+        help="bag: where the readings were taken: an Odometry, PoseStamped or PoseWithCovarianceStamped topic "
+        "(default: --odom-topic)",
+    )
+    parser.add_argument(
+        "--pose-frame",
+        choices=POSE_FRAMES,
+        default="start",
+        help="bag: start: the pose is odometry of a robot switched on at the map's start facing north (x forward, "
+        "y left); map: the pose is in the map's frame, x east, y north (default start)",
+    )
+    parser.add_argument("--allow-missing", action="store_true", help="imports: allow reachable cells without readings")
     args = parser.parse_args(argv)
     if not args.check:
         if args.out is None:
@@ -84,8 +151,10 @@ def main(argv: list[str] | None = None) -> None:
             parser.error(f"--out must end in .npz, got {str(args.out)!r}")
         if not args.out.parent.is_dir():
             parser.error(f"--out: directory {str(args.out.parent)!r} does not exist")
-        if args.k < 1:
+        if args.k is not None and args.k < 1:
             parser.error(f"--k must be >= 1, got {args.k}")
+        if args.from_csv is not None and args.from_bag is not None:
+            parser.error("pass --from-csv or --from-bag, not both")
     try:
         core = office_core(args.map)
     except (ValueError, TypeError) as err:
@@ -93,16 +162,32 @@ def main(argv: list[str] | None = None) -> None:
     print(describe_map(core))
     if args.check:
         return
+    k = 8 if args.k is None else args.k
     if args.from_csv is not None:
         try:
-            db = import_csv(args.from_csv, map=args.map, require_all_cells=not args.allow_missing)
+            db = import_csv(args.from_csv, map=args.map, require_all_cells=not args.allow_missing, per_cell=args.k)
         except ValueError as err:
             parser.error(f"--from-csv: {err}")
+    elif args.from_bag is not None:
+        try:
+            db = import_bag(
+                args.from_bag,
+                map=args.map,
+                sonar=args.sonar_topic,
+                ir=args.ir_topic,
+                odometry=args.odom_topic,
+                pose=args.pose_topic,
+                pose_frame=args.pose_frame,
+                per_cell=args.k,
+                require_all_cells=not args.allow_missing,
+            )
+        except (ValueError, ModuleNotFoundError) as err:  # one line: what is wrong with the bag, or what to install
+            parser.exit(2, f"{parser.prog}: error: --from-bag: {err}\n")
     elif args.model == "realistic":
-        db = record_database(args.k, map=args.map, model=RealisticModel(), seed=args.seed)
+        db = record_database(k, map=args.map, model=RealisticModel(), seed=args.seed)
     else:
         noise = NoiseModel() if args.model == "noise" else None
-        db = record_database(args.k, map=args.map, noise=noise, seed=args.seed, progress=True)
+        db = record_database(k, map=args.map, noise=noise, seed=args.seed, progress=True)
     path = save_database(db, args.out)
     load_database(path, core)  # read back strictly
     recorded = int((db.counts > 0).sum())

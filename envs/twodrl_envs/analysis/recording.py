@@ -10,6 +10,7 @@ fresh episode keys, so a cell's ``k`` readings come from ``k`` independent drift
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -50,14 +51,19 @@ def shortest_paths(core: OfficeCore) -> list[list[int]]:
     return paths
 
 
+Log = Callable[[np.ndarray, np.ndarray], None]
+"""Called with the odometry positions ``(m, 2)`` cm and the readings ``(m, 32)`` cm of each batch the recorder files,
+in filing order: the drive as the robot would log it (``twodrl_envs.analysis.bags.write_bag`` writes it as a bag)."""
+
+
 def drive_and_record(
-    core: OfficeCore, model: RealisticModel, k: int, seed: int, max_tries: int = 20
+    core: OfficeCore, model: RealisticModel, k: int, seed: int, max_tries: int = 20, log: Log | None = None
 ) -> tuple[np.ndarray, list[np.ndarray], dict[str, Any]]:
     """``k`` tours over the reachable cells; returns ``(counts, readings per cell, statistics)``.
 
     A run whose true pose bumps into a wall is driven again with fresh keys (the operator puts the
     robot back at the start), up to ``max_tries`` times; a cell whose run never succeeds gets fewer
-    than ``k`` readings.
+    than ``k`` readings. ``log`` (:data:`Log`) sees each batch of readings as it is filed.
     """
     if isinstance(k, bool) or not isinstance(k, int) or k < 1:
         raise ValueError(f"k must be a positive int, got {k!r}")
@@ -98,8 +104,11 @@ def drive_and_record(
             readings = scene.ranges(pos[done], keys[done], length[todo[done]] + 1)
             odometry = core.lattice.cells[cells[todo[done]]]
             errors.extend(np.linalg.norm(pos[done] - odometry, axis=1).tolist())
-            for row, reading in zip(todo[done], readings, strict=True):
-                per_cell[cells[row]].append(np.clip(reading, LOW_CM, HIGH_CM))
+            reported = np.clip(readings, LOW_CM, HIGH_CM)
+            if log is not None:
+                log(odometry, reported)
+            for row, reading in zip(todo[done], reported, strict=True):
+                per_cell[cells[row]].append(reading)
             todo = todo[~ok]
     counts = np.array([len(r) for r in per_cell], dtype=np.int64)
     stats = {
@@ -120,6 +129,7 @@ def record_database(
     seed: int = 0,
     progress: bool = False,
     model: RealisticModel | None = None,
+    log: Log | None = None,
 ) -> SensorDatabase:
     """Record ``k`` readings per reachable cell of a virtual robot.
 
@@ -129,7 +139,8 @@ def record_database(
     (:func:`drive_and_record`). Otherwise it is placed exactly on each
     cell: ``noise=None`` records the ideal (exact) sensors, a
     :class:`~twodrl_envs.nomad.sensors.NoiseModel` adds per-reading noise to them. Readings are saturated
-    to the sensors' ranges as a real robot reports them. Unreachable free cells get no readings.
+    to the sensors' ranges as a real robot reports them. Unreachable free cells get no readings. ``log``
+    (:data:`Log`) sees the readings and the positions they are filed under, in filing order.
     """
     if isinstance(k, bool) or not isinstance(k, int) or k < 1:
         raise ValueError(f"k must be a positive int, got {k!r}")
@@ -139,7 +150,7 @@ def record_database(
         raise ValueError("pass either model (the stand-in robot) or noise (noisy ideal sensors), not both")
     core = office_core(map)
     if model is not None:
-        counts, per_cell, stats = drive_and_record(core, model, k, seed)
+        counts, per_cell, stats = drive_and_record(core, model, k, seed, log=log)
         recording = {
             "source": "simulated",
             "sensor_model": "realistic (twodrl_envs.nomad.realistic.RealisticModel, NomadOfficeReal-v0)",
@@ -166,6 +177,8 @@ def record_database(
         if noise is not None:
             exact = noise.sample(exact, rng)
         rows.append(np.clip(exact, LOW_CM, HIGH_CM))
+        if log is not None:
+            log(np.repeat(core.lattice.cells[cell : cell + 1], k, axis=0), rows[-1])
     recording = {
         "source": "simulated",
         "sensor_model": "ideal" if noise is None else "noisy ideal (twodrl_envs.nomad.sensors.NoiseModel)",

@@ -250,7 +250,12 @@ def load_database(path: str | Path | None = None, core: OfficeCore | None = None
 
 
 def import_csv(
-    path: str | Path, *, map: str | Path | None = None, require_all_cells: bool = True, tolerance_cm: float = 5.0
+    path: str | Path,
+    *,
+    map: str | Path | None = None,
+    require_all_cells: bool = True,
+    tolerance_cm: float = 5.0,
+    per_cell: int | None = None,
 ) -> SensorDatabase:
     """Build a database from a CSV log with columns ``x_cm, y_cm, sonar_0..sonar_15, ir_0..ir_15``.
 
@@ -258,7 +263,8 @@ def import_csv(
     ``tolerance_cm`` per axis). A position off the map, in a wall, or farther than the tolerance
     from a free cell, a missing column, a non-numeric, non-finite or out-of-range value are
     ``ValueError`` naming the file and line. With ``require_all_cells`` every cell reachable from
-    the start must have at least one reading (otherwise the missing cells are listed).
+    the start must have at least one reading (otherwise the missing cells are listed); ``per_cell`` keeps each
+    cell's first readings only (:func:`import_readings`).
     """
     path = Path(path)
     name = str(path)
@@ -296,6 +302,7 @@ def import_csv(
         recording=recording,
         require_all_cells=require_all_cells,
         tolerance_cm=tolerance_cm,
+        per_cell=per_cell,
     )
 
 
