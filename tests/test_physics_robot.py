@@ -200,3 +200,16 @@ def test_importing_the_env_package_imports_neither_mujoco_nor_rosbags() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+def test_a_policys_trials_on_both_stand_ins_are_counted_and_repeat() -> None:
+    from twodrl_bench.stand_ins import stand_in_trials
+
+    model = cloned_model(None)
+    counts = stand_in_trials(model, 2, seed=3)
+    assert set(counts) == {"NomadOfficeMuJoCo-v0", "NomadOfficeReal-v0"}
+    for tallies in counts.values():
+        assert tallies["success"] + tallies["collision"] + tallies["timeout"] == 2
+    assert stand_in_trials(model, 2, seed=3) == counts
+    with pytest.raises(ValueError, match=r"n must be a positive int, got 0"):
+        stand_in_trials(model, 0)
