@@ -11,7 +11,8 @@ included, so that the same loop runs, unchanged, in simulation::
         robot.move_10cm(int(policy.run(["action"], {"obs": raw})[0][0]))
 
 The ranges are the env's readings as the robot reports them (saturated to the sensors' ranges), the odometry its
-dead reckoning, both in cm; through the input stage (:class:`~twodrl_envs.nomad.deploy.RawObservation`) they give
+dead reckoning, both in cm, read back from the env's float32 observation (so to a few micrometres); through the
+input stage (:class:`~twodrl_envs.nomad.deploy.RawObservation`) they give
 the env's observation bit for bit (tested), so the loop makes the decisions an env episode makes.
 """
 
