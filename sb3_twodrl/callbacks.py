@@ -33,6 +33,7 @@ __all__ = [
     "EpisodeTracker",
     "GoalCheck",
     "GoalCheckCallback",
+    "GoalRecord",
     "NavigationMetricsCallback",
     "StopAfterEpisodes",
     "summarize_episodes",
@@ -237,6 +238,40 @@ class GoalCheck:
     mean_return: float
 
 
+class GoalRecord:
+    """The goal checks of one training run: which check's policy to keep and whether the task is learned.
+
+    The kept check is the best so far: the highest goal rate, then the highest mean return, then the later check.
+    The task is learned once ``patience`` consecutive checks reach ``success_threshold`` (None: never).
+
+    :raises ValueError: if ``success_threshold`` is not in (0, 1] or ``patience`` is not a positive int
+    """
+
+    def __init__(self, success_threshold: float | None = 0.8, patience: int = 2) -> None:
+        if success_threshold is not None and not 0.0 < success_threshold <= 1.0:
+            raise ValueError(f"success_threshold must be in (0, 1] or None, got {success_threshold!r}")
+        if isinstance(patience, bool) or not isinstance(patience, int) or patience < 1:
+            raise ValueError(f"patience must be a positive int, got {patience!r}")
+        self.success_threshold, self.patience = success_threshold, patience
+        self.checks: list[GoalCheck] = []
+        self.kept: GoalCheck | None = None
+
+    def add(self, check: GoalCheck) -> bool:
+        """Record ``check``; whether it is the new one to keep."""
+        self.checks.append(check)
+        if self.kept is None or (check.goal_rate, check.mean_return) >= (self.kept.goal_rate, self.kept.mean_return):
+            self.kept = check
+            return True
+        return False
+
+    @property
+    def learned(self) -> bool:
+        """Whether the last ``patience`` checks all reached ``success_threshold``."""
+        recent = self.checks[-self.patience :]
+        threshold = self.success_threshold
+        return threshold is not None and len(recent) == self.patience and all(c.goal_rate >= threshold for c in recent)
+
+
 class GoalCheckCallback(EvalCallback):
     """SB3's ``EvalCallback`` that keeps the policy that reached the goal and stops training once it has learned.
 
@@ -245,9 +280,9 @@ class GoalCheckCallback(EvalCallback):
     ``eval/success_rate``; the check's **goal rate** is the share of them whose last ``info["is_success"]`` is true.
 
     - **Keeps what worked:** a copy of the policy's parameters (and of ``VecNormalize``'s statistics) at the best
-      check so far: the highest goal rate, then the highest mean return, then the later check. When training ends
-      (the budget spent, or stopped) the kept parameters are loaded back into the model, so ``model.save`` saves
-      that policy; :attr:`kept` says which check it was.
+      check so far (:class:`GoalRecord`: the highest goal rate, then the highest mean return, then the later
+      check). When training ends (the budget spent, or stopped) the kept parameters are loaded back into the model,
+      so ``model.save`` saves that policy; :attr:`kept` says which check it was.
     - **Stops when learned:** once ``patience`` consecutive checks reach ``success_threshold`` (None: never
       stops early); the budget is then a ceiling. :attr:`learned_at` is the timestep of the last of them.
 
@@ -267,19 +302,23 @@ class GoalCheckCallback(EvalCallback):
         deterministic: bool = True,
         **kwargs: Any,
     ) -> None:
-        if success_threshold is not None and not 0.0 < success_threshold <= 1.0:
-            raise ValueError(f"success_threshold must be in (0, 1] or None, got {success_threshold!r}")
-        if isinstance(patience, bool) or not isinstance(patience, int) or patience < 1:
-            raise ValueError(f"patience must be a positive int, got {patience!r}")
+        self.record = GoalRecord(success_threshold, patience)
         super().__init__(
             eval_env, eval_freq=eval_freq, n_eval_episodes=n_eval_episodes, deterministic=deterministic, **kwargs
         )
-        self.success_threshold, self.patience = success_threshold, patience
-        self.checks: list[GoalCheck] = []
-        self.kept: GoalCheck | None = None
         self.learned_at: int | None = None
         self._kept_state: tuple[dict[str, Any], Any] | None = None
         self._reports_success = True
+
+    @property
+    def checks(self) -> list[GoalCheck]:
+        """Every check so far."""
+        return self.record.checks
+
+    @property
+    def kept(self) -> GoalCheck | None:
+        """The check whose policy is kept, None before the first."""
+        return self.record.kept
 
     def _on_step(self) -> bool:
         checked = self.eval_freq > 0 and self.n_calls % self.eval_freq == 0
@@ -291,20 +330,17 @@ class GoalCheckCallback(EvalCallback):
             self._reports_success = False
             return continue_training
         check = GoalCheck(self.num_timesteps, float(np.mean(self._is_success_buffer)), self.last_mean_reward)
-        self.checks.append(check)
-        if self.kept is None or (check.goal_rate, check.mean_return) >= (self.kept.goal_rate, self.kept.mean_return):
-            self.kept = check
+        if self.record.add(check):
             statistics = self.model.get_vec_normalize_env()
             self._kept_state = (
                 copy.deepcopy(self.model.policy.state_dict()),
                 None if statistics is None else copy.deepcopy((statistics.obs_rms, statistics.ret_rms)),
             )
-        recent = self.checks[-self.patience :]
-        threshold = self.success_threshold
-        if threshold is not None and len(recent) == self.patience and all(c.goal_rate >= threshold for c in recent):
+        if self.record.learned:
             self.learned_at = self.num_timesteps
             if self.verbose >= 1:
-                print(f"Learned: goal rate >= {threshold} in {self.patience} checks in a row, stopping")
+                threshold, patience = self.record.success_threshold, self.record.patience
+                print(f"Learned: goal rate >= {threshold} in {patience} checks in a row, stopping")
             return False
         return continue_training
 

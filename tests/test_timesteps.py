@@ -155,6 +155,8 @@ def test_folder_settings_are_read(tmp_path) -> None:
         ({"timesteps": None}, "protocol.eval_episodes"),
         ({"timesteps": None, "eval_episodes": 1, "events": 3}, "protocol.events"),
         ({"timesteps": None, "eval_episodes": 1, "epochs": 3}, r"takes only .* got \['epochs'\]"),
+        ({"timesteps": None, "eval_episodes": 1, "keep_learned": True}, "keep_learned needs protocol.check_every"),
+        ({"timesteps": None, "eval_episodes": 1, "check_every": 9, "keep_learned": 1}, "protocol.keep_learned"),
     ],
 )
 def test_bad_protocol_names_the_key(protocol: dict[str, Any], match: str) -> None:
@@ -187,3 +189,19 @@ def test_monitor_files_become_training_episodes_and_a_curve(tmp_path) -> None:
     assert math.isnan(learning_curve(episodes, 24, bins=2)[1][1])  # an empty bin
     assert training_episodes(tmp_path, 1, None)[:, 2].tolist() == [0.0, 0.0]  # no events key: none counted
     assert np.array_equal(training_episodes(tmp_path, 2, None)[:, :2], episodes[:, :2])
+
+
+@pytest.mark.slow
+def test_keep_learned_stops_once_learned_and_evaluates_the_kept_policy(tmp_path) -> None:
+    """The timesteps protocol with ``keep_learned`` behaves as ``sb3-twodrl-train``: checks from the map's start,
+    the best check's policy kept, training stopped once learned, the final evaluation of the kept policy."""
+    pytest.importorskip("rl_zoo3")
+    protocol = {"timesteps": 2_000_000, "eval_episodes": 2, "check_every": 25_600, "check_episodes": 1}
+    protocol["keep_learned"] = True
+    arm = {"name": "twoda2c", "algo": "twoda2c"}
+    arm["hyperparams"] = resolve_arm(arm, "NomadOffice-v0", protocol)
+    (row,) = run_job(arm, "NomadOffice-v0", {"map": "generated:S:3"}, protocol, 0, str(tmp_path), ["twodrl_envs"])
+    checks = json.loads(row["checks"])
+    assert row["learned_at"] == checks[-1][0] < 2_000_000 and checks[-1][1] == checks[-2][1] == 1.0
+    assert row["steps"] == row["learned_at"] + 64  # the stop comes at the first step after the rollout's check
+    assert row["kept_at"] in [t for t, share in checks if share == 1.0] and row["final_success_share"] == 1.0

@@ -132,8 +132,8 @@ def _transfer(transfer: Any, save_model: bool) -> dict[str, Any]:
 class TimestepsProtocol:
     """A budget of ``timesteps`` (None: the entry's ``n_timesteps``) trained by rl-zoo3, then ``eval_episodes``
     deterministic episodes; run by :mod:`twodrl_bench.timesteps` (whose docstring describes ``events``,
-    ``entry``, ``task``, ``check_every``, ``check_episodes`` and ``transfer``). ``checkpoint_every``: timesteps
-    between checkpoints (0: none)."""
+    ``entry``, ``task``, ``check_every``, ``check_episodes``, ``keep_learned`` and ``transfer``).
+    ``checkpoint_every``: timesteps between checkpoints (0: none)."""
 
     timesteps: int | None
     eval_episodes: int
@@ -143,6 +143,7 @@ class TimestepsProtocol:
     checkpoint_every: int = 20_000
     check_every: int = 0
     check_episodes: int = 5
+    keep_learned: bool = False
     transfer: dict[str, Any] | None = None
 
     module: ClassVar[str] = "twodrl_bench.timesteps"
@@ -162,6 +163,10 @@ class TimestepsProtocol:
         positive_int("protocol.checkpoint_every", self.checkpoint_every, zero=True)
         positive_int("protocol.check_every", self.check_every, zero=True)
         positive_int("protocol.check_episodes", self.check_episodes)
+        if not isinstance(self.keep_learned, bool):
+            raise ValueError(f"protocol.keep_learned must be true or false, got {self.keep_learned!r}")
+        if self.keep_learned and not self.check_every:
+            raise ValueError("protocol.keep_learned needs protocol.check_every > 0 (the checks it keeps from)")
         if self.transfer is not None:
             object.__setattr__(self, "transfer", _transfer(self.transfer, True))
 
@@ -177,6 +182,8 @@ class TimestepsProtocol:
         out = {k: v for k, v in dataclasses.asdict(self).items() if v is not None or k == "timesteps"}
         if not self.check_every:
             del out["check_every"], out["check_episodes"]
+        if not self.keep_learned:
+            del out["keep_learned"]
         return out
 
 

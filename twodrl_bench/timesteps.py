@@ -20,6 +20,12 @@ Keys this job reads, beside the fields every spec has:
 - ``protocol.check_every`` (optional, 0: none): timesteps between goal checks, each ``protocol.check_episodes``
   deterministic episodes on a fresh evaluation env (:class:`GoalChecks`); the row's ``checks`` and
   ``first_goal_at`` (the first check's timestep at which an episode reached the goal, ``info["is_success"]``).
+- ``protocol.keep_learned`` (optional, false): as ``sb3-twodrl-train`` does (:mod:`twodrl_zoo.manager`), keep the
+  policy of the best check (:class:`sb3_twodrl.callbacks.GoalRecord`) and stop training once
+  :data:`~twodrl_zoo.manager.PATIENCE` checks in a row reach :data:`~twodrl_zoo.manager.SUCCESS_THRESHOLD`; the
+  final evaluation and the transfer then run the kept policy. Columns ``kept_at``, ``learned_at`` (NaN if never)
+  and ``steps`` (the timesteps trained: one vector step past ``learned_at`` when stopped, as the stop comes at the
+  first step after the rollout's check).
 - ``protocol.transfer`` (optional): ``{env, trials, seed, env_kwargs}``, the final policy's deterministic trials on
   another env (:func:`twodrl_bench.trials.transfer_columns`, paper section 3.5), columns ``transfer_*``.
 - ``env_kwargs``: the job's (``{seed}`` in a value is its seed). Where the env derives settings from them
@@ -53,6 +59,7 @@ from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.monitor import Monitor, ResultsWriter
 
+from sb3_twodrl.callbacks import GoalCheck, GoalRecord
 from twodrl_bench import jobs
 from twodrl_bench.experiment import Arm, Experiment, Job, with_seed
 from twodrl_bench.protocol import TimestepsProtocol
@@ -60,6 +67,7 @@ from twodrl_bench.settings import check_entry, derived, timesteps_entry
 from twodrl_bench.settings import settings_file as settings_file_of
 from twodrl_bench.trials import transfer_columns
 from twodrl_zoo.hyperparams import resolve
+from twodrl_zoo.manager import PATIENCE, SUCCESS_THRESHOLD
 
 Row = dict[str, Any]
 EVAL_SEED = 10**6
@@ -171,11 +179,19 @@ class GoalChecks(BaseCallback):
     """Every ``protocol.check_every`` timesteps, at a rollout's start, ``protocol.check_episodes`` deterministic
     episodes on a fresh evaluation env seeded ``EVAL_SEED + seed`` (:func:`evaluate`); ``[timestep, share that
     reached the goal]`` appended to ``state["checks"]`` (checkpointed with the job, so a resumed run checks as an
-    uninterrupted one). The checks' time is part of the row's ``wall_s``."""
+    uninterrupted one). The checks' time is part of the row's ``wall_s``.
+
+    With ``protocol.keep_learned``, the policy of the best check is kept in ``state["kept"]`` (its timestep, goal
+    rate, mean return and parameters, checkpointed too) and loaded back when training ends; training stops once
+    the checks say the task is learned (:class:`sb3_twodrl.callbacks.GoalRecord`)."""
 
     def __init__(self, job: Job, state: dict[str, Any], make_env: Any):
         super().__init__()
         self.job, self.state, self.make_env = job, state, make_env
+        self.record = GoalRecord(SUCCESS_THRESHOLD, PATIENCE)
+        for timestep, share, mean_return in state.get("kept_checks", []):
+            self.record.add(GoalCheck(timestep, share, mean_return))
+        self._stop = False
 
     def _on_rollout_start(self) -> None:
         every = self.job.protocol.check_every
@@ -185,13 +201,27 @@ class GoalChecks(BaseCallback):
             return
         env = self.make_env()
         try:
-            share = evaluate(self.model, env, self.job.protocol.check_episodes, None)["final_success_share"]
+            result = evaluate(self.model, env, self.job.protocol.check_episodes, None)
         finally:
             env.close()
-        checks.append([self.num_timesteps, share])
+        checks.append([self.num_timesteps, result["final_success_share"]])
+        if not self.job.protocol.keep_learned:
+            return
+        check = GoalCheck(self.num_timesteps, result["final_success_share"], result["final_return"])
+        self.state.setdefault("kept_checks", []).append([check.timesteps, check.goal_rate, check.mean_return])
+        if self.record.add(check):
+            self.state["kept"] = {**vars(check), "parameters": copy.deepcopy(self.model.policy.state_dict())}
+        if self.record.learned:
+            self.state["learned_at"] = self.num_timesteps
+            self._stop = True
 
     def _on_step(self) -> bool:
-        return True
+        return not self._stop
+
+    def _on_training_end(self) -> None:
+        kept = self.state.get("kept")
+        if kept is not None:
+            self.model.policy.load_state_dict(kept["parameters"])
 
 
 def first_goal(checks: list[list[float]]) -> float:
@@ -354,6 +384,11 @@ def run(job: Job) -> list[Row]:
         if protocol.check_every
         else {}
     )
+    if protocol.keep_learned:
+        kept = state.get("kept")
+        checks["kept_at"] = kept["timesteps"] if kept else math.nan
+        checks["learned_at"] = state.get("learned_at", math.nan)
+        checks["steps"] = model.num_timesteps
     transfer = (
         transfer_columns(model, env, env_kwargs, with_seed(protocol.transfer, job.seed)) if protocol.transfer else {}
     )
