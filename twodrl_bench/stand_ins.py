@@ -26,4 +26,7 @@ def stand_in_trials(
     """
     if isinstance(n, bool) or not isinstance(n, int) or n < 1:
         raise ValueError(f"n must be a positive int, got {n!r}")
+    from twodrl_zoo.zoo import import_gym_packages
+
+    import_gym_packages()  # the env packages that register the IDs
     return {env_id: tally(_outcomes(model, env_id, n, seed, dict(env_kwargs or {}))) for env_id in STAND_INS}
