@@ -67,3 +67,12 @@ def test_one_precedence_the_written_entry_the_task_the_user() -> None:
     assert resolved.entry["n_envs"] == 64 and resolved.entry["env_kwargs"] == resolved.env_kwargs
     assert resolved.env_kwargs == {"a": 1, **derived.env_kwargs, "map": "generated:L:3", "starts": "map"}
     assert resolved.eval_env_kwargs == {"a": 1, "map": "generated:L:3", **derived.eval_env_kwargs, "b": 2}
+
+
+def test_export_help_is_plain_text(capsys: pytest.CaptureFixture[str]) -> None:
+    from twodrl_zoo.export import main
+
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    out = capsys.readouterr().out
+    assert "--input-stage" in out and not any(markup in out for markup in ("``", ":func:", ":class:", "::"))

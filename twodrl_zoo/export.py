@@ -208,13 +208,26 @@ def _literal_options(pairs: list[str]) -> dict[str, Any]:
     return options
 
 
+HELP = """Export a trained policy's deterministic actor, TorchScript or ONNX: observations in, actions out.
+
+The graph maps a float32 batch of observations (n, *obs_shape) to int64 actions (n,), the actions
+model.predict(obs, deterministic=True) gives. With --format onnx (pip install "sb3-twodrl[onnx]") it needs only
+onnxruntime: input "obs", output "action". With --input-stage ENV_ID (the env's options by --env-kwargs, values
+as Python literals) the env's input stage goes before the actor: the Nomad envs' graph then takes the robot's
+16 sonar and 16 IR ranges and its odometry in cm, float64 (n, 34).
+
+    sb3-twodrl-export logs/twoda2c/NomadOffice-v0_1/NomadOffice-v0.zip policy.pt
+    sb3-twodrl-export model.zip policy.onnx --format onnx --input-stage NomadOffice-v0 --env-kwargs map:'"my.json"'
+"""
+
+
 def main(argv: list[str] | None = None) -> None:
-    """``sb3-twodrl-export``: load a saved model and write its deterministic actor."""
+    """``sb3-twodrl-export``: load a saved model and write its deterministic actor (:data:`HELP`)."""
     from sb3_twodrl import ALGOS
     from twodrl_zoo.cli import require_extra
 
     parser = argparse.ArgumentParser(
-        prog="sb3-twodrl-export", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+        prog="sb3-twodrl-export", description=HELP, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("model", type=Path, help="saved SB3 model (.zip)")
     parser.add_argument("out", type=Path, help="file to write (.pt for TorchScript, .onnx for ONNX)")
