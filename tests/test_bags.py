@@ -120,6 +120,11 @@ def test_bad_arguments_are_errors_naming_them(tmp_path: Path, drive, options: di
         import_bag(bag, map=MAP, require_all_cells=False, **options)
 
 
+def test_write_bag_names_a_bad_period(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match=r"period_s must be a number of seconds from 0.001, got 0"):
+        write_bag(tmp_path / "b", np.zeros((1, 2)), np.full((1, 32), 40.0), map=MAP, period_s=0)
+
+
 def test_without_rosbags_the_command_names_the_extra(tmp_path: Path) -> None:
     code = (
         "import sys; sys.modules['rosbags'] = None\n"

@@ -247,6 +247,8 @@ def write_bag(
     as a Nomad-like robot logs it: per reading, its odometry, then each sensor's ``Range`` (or each ring's
     ``LaserScan``), ``period_s`` apart; ranges at the sensors' maxima are ``+inf`` (REP 117)."""
     frame = _check_frame(pose_frame)
+    if isinstance(period_s, bool) or not isinstance(period_s, int | float) or not 0.001 <= period_s < 1e6:
+        raise ValueError(f"period_s must be a number of seconds from 0.001, got {period_s!r}")
     positions_cm = np.asarray(positions_cm, dtype=np.float64)
     ranges_cm = np.asarray(ranges_cm, dtype=np.float64)
     if positions_cm.ndim != 2 or positions_cm.shape[1] != 2 or ranges_cm.shape != (len(positions_cm), 32):
