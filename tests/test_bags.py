@@ -38,13 +38,15 @@ def _same(imported: SensorDatabase, direct: SensorDatabase) -> None:
 
 
 @pytest.mark.parametrize(
-    ("topics", "pose_frame"),
-    [({}, "start"), ({"sonar": "/sonar_scan", "ir": "/ir_scan"}, "map")],
-    ids=["range-topics-odometry-frame", "laserscans-map-frame"],
+    ("topics", "pose_frame", "storage"),
+    [({}, "start", "sqlite3"), ({"sonar": "/sonar_scan", "ir": "/ir_scan"}, "map", "mcap")],
+    ids=["range-topics-odometry-frame-sqlite", "laserscans-map-frame-mcap"],
 )
-def test_the_bag_round_trip_equals_the_direct_recording(tmp_path: Path, drive, topics: dict, pose_frame: str) -> None:
+def test_the_bag_round_trip_equals_the_direct_recording(
+    tmp_path: Path, drive, topics: dict, pose_frame: str, storage: str
+) -> None:
     direct, positions, readings = drive
-    bag = write_bag(tmp_path / "drive", positions, readings, map=MAP, pose_frame=pose_frame, **topics)
+    bag = write_bag(tmp_path / "drive", positions, readings, map=MAP, pose_frame=pose_frame, storage=storage, **topics)
     imported = import_bag(bag, map=MAP, pose_frame=pose_frame, **topics)
     _same(imported, direct)
     assert imported.metadata["recording"]["source"] == "ros2 bag"

@@ -38,6 +38,7 @@ SCAN = "sensor_msgs/msg/LaserScan"
 ODOMETRY = "nav_msgs/msg/Odometry"
 POSE_TYPES = (ODOMETRY, "geometry_msgs/msg/PoseStamped", "geometry_msgs/msg/PoseWithCovarianceStamped")
 POSE_FRAMES = ("start", "map")
+STORAGES = ("sqlite3", "mcap")
 ROS_HINT = 'reading or writing ROS 2 bags needs rosbags: pip install "sb3-twodrl[ros]"'
 SONAR_TOPIC, IR_TOPIC, ODOMETRY_TOPIC = "/sonar_{i}", "/ir_{i}", "/odom"
 
@@ -242,11 +243,15 @@ def write_bag(
     odometry: str = ODOMETRY_TOPIC,
     pose_frame: str = "start",
     period_s: float = 0.5,
+    storage: str = "sqlite3",
 ) -> Path:
-    """Write a drive (positions ``(n, 2)`` cm in ``map``'s frame, readings ``(n, 32)`` cm) as a ROS 2 bag (SQLite),
+    """Write a drive (positions ``(n, 2)`` cm in ``map``'s frame, readings ``(n, 32)`` cm) as a ROS 2 bag (``storage``
+    ``"sqlite3"`` or ``"mcap"``),
     as a Nomad-like robot logs it: per reading, its odometry, then each sensor's ``Range`` (or each ring's
     ``LaserScan``), ``period_s`` apart; ranges at the sensors' maxima are ``+inf`` (REP 117)."""
     frame = _check_frame(pose_frame)
+    if storage not in STORAGES:
+        raise ValueError(f"storage must be one of {STORAGES}, got {storage!r}")
     if isinstance(period_s, bool) or not isinstance(period_s, int | float) or not 0.001 <= period_s < 1e6:
         raise ValueError(f"period_s must be a number of seconds from 0.001, got {period_s!r}")
     positions_cm = np.asarray(positions_cm, dtype=np.float64)
@@ -294,7 +299,8 @@ def write_bag(
 
     point, quaternion, vector = (types[f"geometry_msgs/msg/{t}"] for t in ("Point", "Quaternion", "Vector3"))
     path = Path(path)
-    with rosbags.rosbag2.Writer(path, version=8) as writer:
+    plugin = rosbags.rosbag2.StoragePlugin.MCAP if storage == "mcap" else rosbags.rosbag2.StoragePlugin.SQLITE3
+    with rosbags.rosbag2.Writer(path, version=8, storage_plugin=plugin) as writer:
         odom = writer.add_connection(odometry, ODOMETRY, typestore=typestore)
         rings = []
         for first, pattern in ((0, sonar), (N_SONAR, ir)):
