@@ -7,7 +7,12 @@ For each map and algorithm it runs, in a fresh process and an empty folder,
 with no ``--seed`` (rl-zoo3 then draws one, as for any user; the row records it), and reads the command's own
 output: the goal rate of its 20 deterministic test episodes from the map's start, and its ``goal_checks.json``
 (the kept check, whether it stopped as learned, training seconds). Rows are appended to ``--out`` (a map and
-algorithm already there are skipped: the run resumes); ``--table`` prints the table of a rows file.
+algorithm already there are skipped: the run resumes); ``--table`` prints the table of rows files.
+
+``--database`` runs, per generated map, docs/own_office.md's database path as the doc writes it, from its own
+text: ``sb3-twodrl-map --seed SEED --size SIZE --out my_office.json``, then the doc's record, train
+(``NomadOfficeMemorable-v0``) and export commands and its robot-side loop (20 trials on the stand-in robot from the
+map's start); the row's ``goal_rate`` is the loop's, ``db_goal_rate`` the train command's.
 
     OMP_NUM_THREADS=1 python scripts/bench_first_try.py --algos twoda2c --sizes S M --map-seeds 5000 5001 \\
         --out results/first_try/rows_twoda2c.csv
@@ -39,7 +44,62 @@ FIELDS = (
     "map", "size", "moves", "algo", "seed", "goal_rate", "learned", "stopped_learned", "kept_at", "steps", "budget",
     "train_s", "wall_s", "commit", "cpu",
 )  # fmt: skip
+DATABASE_FIELDS = (*FIELDS, "db_goal_rate")
 LINE = re.compile(r"goal rate (\d\.\d\d) \((\d+) of (\d+)")
+STAND_IN = re.compile(r"^goal rate on the stand-in robot: (\d\.\d\d)", re.MULTILINE)
+DOC = Path(__file__).resolve().parents[1] / "docs" / "own_office.md"
+
+
+def doc_database_path() -> tuple[list[str], str]:
+    """docs/own_office.md's database commands (record with --out, train on the database, export) and its
+    robot-side loop, as written."""
+    text = DOC.read_text()
+    steps = text[text.index("## 3. ") : text.index("## Start from a generated office")]
+    lines = [line[2:] for line in steps.splitlines() if line.startswith("$ sb3-twodrl-")]
+    commands = [c for c in lines if "--out" in c or "NomadOfficeMemorable-v0" in c]
+    loop = text[text.index("## 5. ") :].split("```python\n", 1)[1].split("```", 1)[0]
+    return commands, loop
+
+
+def run_database(map_: str, commit: str, cpu: str) -> dict[str, object]:
+    """docs/own_office.md's database path on the generated office ``map_`` (``generated:SIZE:SEED``)."""
+    _, size, map_seed = map_.split(":")
+    commands, loop = doc_database_path()
+    with tempfile.TemporaryDirectory() as folder:
+        clock = time.perf_counter()
+        out = ""
+        for command in [f"sb3-twodrl-map --seed {map_seed} --size {size} --out my_office.json", *commands]:
+            done = subprocess.run(["bash", "-c", command], cwd=folder, capture_output=True, text=True)
+            if done.returncode != 0:
+                raise RuntimeError(f"{command} failed:\n{done.stdout[-2000:]}\n{done.stderr[-2000:]}")
+            out += done.stdout
+        drive = subprocess.run([sys.executable, "-c", loop], cwd=folder, capture_output=True, text=True)
+        if drive.returncode != 0:
+            raise RuntimeError(f"the robot loop failed:\n{drive.stderr[-2000:]}")
+        wall = time.perf_counter() - clock
+        (record_file,) = Path(folder).glob("logs/*/*/goal_checks.json")
+        record = json.loads(record_file.read_text())
+    rate = float(STAND_IN.search(drive.stdout).group(1))  # type: ignore[union-attr]
+    facts = task_facts("NomadOffice-v0", {"map": map_})
+    assert facts is not None
+    return {
+        "map": map_,
+        "size": size_class(facts["shortest_path"]),
+        "moves": facts["shortest_path"],
+        "algo": "twoda2c-database",
+        "seed": int(re.search(r"^Seed: (\d+)$", out, re.MULTILINE).group(1)),  # type: ignore[union-attr]
+        "goal_rate": rate,
+        "learned": rate >= 0.8,
+        "stopped_learned": record["learned_at"] is not None,
+        "kept_at": record["kept"]["timesteps"] if record["kept"] else "",
+        "steps": record["num_timesteps"],
+        "budget": record["n_timesteps"],
+        "train_s": record["train_s"],
+        "wall_s": round(wall, 1),
+        "commit": commit,
+        "cpu": cpu,
+        "db_goal_rate": float(LINE.search(out).group(1)),  # type: ignore[union-attr]
+    }
 
 
 def run(algo: str, map_: str, commit: str, cpu: str) -> dict[str, object]:
@@ -114,6 +174,7 @@ def main() -> None:
     parser.add_argument("--sizes", nargs="*", default=[], help="size classes of generated maps (S, M, L)")
     parser.add_argument("--map-seeds", nargs="*", type=int, default=[], help="generated map seeds")
     parser.add_argument("--algos", nargs="+", default=["twoda2c"])
+    parser.add_argument("--database", action="store_true", help="docs/own_office.md's database path (TwoDimA2C)")
     parser.add_argument("--out", type=Path, help="CSV to append rows to")
     parser.add_argument("--table", type=Path, nargs="+", help="print the table of rows CSVs and exit")
     args = parser.parse_args()
@@ -132,15 +193,16 @@ def main() -> None:
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
     cpu = next((line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo") if "model name" in line), "")
     cpu = cpu or platform.processor()
+    fields = DATABASE_FIELDS if args.database else FIELDS
     for map_ in maps:
-        for algo in args.algos:
+        for algo in ["twoda2c-database"] if args.database else args.algos:
             if (map_, algo) in done:
                 continue
-            row = run(algo, map_, commit, cpu)
-            print(" | ".join(str(row[f]) for f in FIELDS), flush=True)
+            row = run_database(map_, commit, cpu) if args.database else run(algo, map_, commit, cpu)
+            print(" | ".join(str(row[f]) for f in fields), flush=True)
             new = not args.out.exists()
             with args.out.open("a", newline="") as f:
-                writer = csv.DictWriter(f, fieldnames=FIELDS)
+                writer = csv.DictWriter(f, fieldnames=fields)
                 if new:
                     writer.writeheader()
                 writer.writerow(row)
