@@ -4,11 +4,14 @@ in cm in, a move out; an exported policy with the raw input stage reaches the go
 from __future__ import annotations
 
 import importlib.util
+from collections.abc import Callable
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 import pytest
 import torch as th
+from stable_baselines3 import A2C
 
 import twodrl_envs  # noqa: F401
 from tests.cloned_policy import cloned_model
@@ -54,24 +57,31 @@ def test_the_raw_readings_give_the_envs_observation(env_id: str) -> None:
     assert robot.sonar_cm().min() >= 40.0 and robot.ir_cm().max() <= 40.0  # saturated as the robot reports them
 
 
-def _exported_policy(tmp_path, model, map_name: str | None):
-    """The policy as sb3-twodrl-export --input-stage writes it (TorchScript, raw cm in), and a caller of it."""
-    from twodrl_zoo.export import deploy_input, export_policy
+def _exported_policy(tmp_path: Path, model: A2C, map_name: str | None, fmt: str) -> Callable[[np.ndarray], int]:
+    """The policy as ``sb3-twodrl-export --input-stage NomadOffice-v0`` writes it (raw cm in), and a caller of it:
+    ONNX run by onnxruntime as the doc's loop runs it, or TorchScript."""
+    from twodrl_zoo.export import deploy_input, export_onnx, export_policy
 
-    path = export_policy(model, tmp_path / "policy.pt", input_stage=deploy_input("NomadOffice-v0", {"map": map_name}))
-    policy = th.jit.load(str(path))
+    stage = deploy_input("NomadOffice-v0", {"map": map_name})
+    if fmt == "onnx":
+        onnxruntime = pytest.importorskip("onnxruntime")
+        session = onnxruntime.InferenceSession(str(export_onnx(model, tmp_path / "policy.onnx", input_stage=stage)))
+        return lambda raw: int(session.run(["action"], {"obs": raw})[0][0])
+    policy = th.jit.load(str(export_policy(model, tmp_path / "policy.pt", input_stage=stage)))
     return lambda raw: int(policy(th.as_tensor(raw))[0])
 
 
-@pytest.mark.parametrize("env_id", IDS[1:])
-def test_the_docs_robot_loop_reaches_the_goal_on_the_stand_in_robot(tmp_path, env_id: str) -> None:
+@pytest.mark.parametrize(
+    ("env_id", "fmt"), [("NomadOfficeReal-v0", "torchscript"), pytest.param(*IDS[2].values, "onnx", marks=IDS[2].marks)]
+)
+def test_the_docs_robot_loop_reaches_the_goal_on_the_stand_in_robot(tmp_path: Path, env_id: str, fmt: str) -> None:
     core = office_core(None)
     readers = [RealisticRobot(core, None)]
     if HAS_MUJOCO:
         from twodrl_envs.nomad.physics import MuJoCoRobot
 
         readers.append(MuJoCoRobot(core))
-    act = _exported_policy(tmp_path, cloned_model(None, tuple(readers)), None)
+    act = _exported_policy(tmp_path, cloned_model(None, tuple(readers)), None, fmt)
     for seed in (0, 1, 2):
         robot = StandInRobot(env_id, seed=seed)
         sonar_cm, ir_cm, odometry_cm, move_10cm, at_goal = (
