@@ -65,6 +65,7 @@ def _exported_policy(tmp_path: Path, model: A2C, map_name: str | None, fmt: str)
     stage = deploy_input("NomadOffice-v0", {"map": map_name})
     if fmt == "onnx":
         onnxruntime = pytest.importorskip("onnxruntime")
+        pytest.importorskip("onnx")
         session = onnxruntime.InferenceSession(str(export_onnx(model, tmp_path / "policy.onnx", input_stage=stage)))
         return lambda raw: int(session.run(["action"], {"obs": raw})[0][0])
     policy = th.jit.load(str(export_policy(model, tmp_path / "policy.pt", input_stage=stage)))
