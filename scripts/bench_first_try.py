@@ -16,7 +16,7 @@ map's start); the row's ``goal_rate`` is the loop's, ``db_goal_rate`` the train 
 
     OMP_NUM_THREADS=1 python scripts/bench_first_try.py --algos twoda2c --sizes S M --map-seeds 5000 5001 \\
         --out results/first_try/rows_twoda2c.csv
-    python scripts/bench_first_try.py --table results/first_try/rows_*.csv
+    python scripts/bench_first_try.py --table results/first_try/rows_*.csv --plot results/first_try/fig_time.png
 """
 
 from __future__ import annotations
@@ -168,6 +168,36 @@ def table(rows: list[dict[str, str]]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def plot(rows: list[dict[str, str]], path: Path) -> None:
+    """Wall seconds of the whole command against the office's shortest path, per arm; offices below 0.8 hollow."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure, axes = plt.subplots(figsize=(7, 4))
+    styles = (("twoda2c", "o", "C0"), ("a2c", "s", "C1"), ("twoda2c-database", "^", "C2"))
+    for algo, marker, color in styles:
+        group = [r for r in rows if r["algo"] == algo]
+        for good in (True, False):
+            chosen = [r for r in group if (r["learned"] == "True") == good]
+            if chosen:
+                axes.scatter(
+                    [int(r["moves"]) for r in chosen],
+                    [float(r["wall_s"]) for r in chosen],
+                    marker=marker,
+                    facecolors=color if good else "none",
+                    edgecolors=color,
+                    label=f"{algo}" + ("" if good else ", goal rate < 0.8"),
+                )
+    axes.set_xlabel("shortest path (moves)")
+    axes.set_ylabel("wall seconds of the command")
+    axes.set_yscale("log")
+    axes.legend(fontsize=8)
+    figure.tight_layout()
+    figure.savefig(path, dpi=120)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--maps", nargs="*", default=[], help="maps as the env takes them ('office': the paper's)")
@@ -177,6 +207,7 @@ def main() -> None:
     parser.add_argument("--database", action="store_true", help="docs/own_office.md's database path (TwoDimA2C)")
     parser.add_argument("--out", type=Path, help="CSV to append rows to")
     parser.add_argument("--table", type=Path, nargs="+", help="print the table of rows CSVs and exit")
+    parser.add_argument("--plot", type=Path, help="with --table: also draw wall seconds against shortest path here")
     args = parser.parse_args()
     if args.table is not None:
         rows = []
@@ -184,6 +215,8 @@ def main() -> None:
             with path.open(newline="") as f:
                 rows += list(csv.DictReader(f))
         print(table(rows), end="")
+        if args.plot is not None:
+            plot(rows, args.plot)
         return
     maps = list(args.maps) + [f"generated:{s}:{seed}" for seed in args.map_seeds for s in args.sizes]
     done = set()
