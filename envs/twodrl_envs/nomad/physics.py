@@ -213,14 +213,15 @@ class MuJoCoRobot(Robot):
         return self.data.qpos * 100.0
 
     def _run(self, steps: int, stop_when_settled: bool) -> np.ndarray | None:
-        """Step the physics; the robot's position (m, joint coordinates) where it first touched a wall, else None."""
+        """Step the physics; the robot's position (m, joint coordinates) where it first touched a wall (it stays
+        there), else None. ``mj_step1`` + ``mj_step2`` is ``mj_step``, split where the contacts are known."""
         mujoco, m, d = self._mj, self.mjmodel, self.data
         settled = (SETTLED_CM_S / 100.0) ** 2
         for _ in range(steps):
-            before = d.qpos.copy()
-            mujoco.mj_step(m, d)
-            if d.ncon:  # contacts of this step were found at its start pose; only the robot can touch
-                return before
+            mujoco.mj_step1(m, d)  # positions, collisions
+            if d.ncon:  # only the robot can touch anything
+                return d.qpos.copy()
+            mujoco.mj_step2(m, d)  # forces, integration
             if stop_when_settled and d.qvel[0] ** 2 + d.qvel[1] ** 2 < settled:
                 break
         return None
