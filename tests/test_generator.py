@@ -20,11 +20,10 @@ from twodrl_envs.nomad.geometry import (
     SHIPPED_MAPS,
     build_lattice,
     check_goal_reachable,
-    load_map,
-    map_source,
     parse_map,
 )
 from twodrl_envs.nomad.map_cli import main as map_main
+from twodrl_envs.nomad.maps import load_map, map_source
 
 MAX_SIDE_CM = 1050  # the bound this file holds every generated office to
 SEEDS = st.integers(0, 999)

@@ -12,7 +12,8 @@ from sb3_twodrl.callbacks import EpisodeTracker, summarize_episodes
 from twodrl_envs.analysis.cli import main as record_main
 from twodrl_envs.analysis.dilemma import measure
 from twodrl_envs.nomad.core import office_core
-from twodrl_envs.nomad.geometry import SHIPPED_MAPS, load_map
+from twodrl_envs.nomad.geometry import SHIPPED_MAPS
+from twodrl_envs.nomad.maps import load_map
 from twodrl_zoo.vec_env import make_train_env
 
 VEC = {"num_envs": 2, "vectorization_mode": "vector_entry_point"}

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from twodrl_envs.nomad.core import office_core
-from twodrl_envs.nomad.geometry import ROBOT_RADIUS_CM, load_map, swept_clearance
+from twodrl_envs.nomad.geometry import ROBOT_RADIUS_CM, swept_clearance
+from twodrl_envs.nomad.maps import load_map
 from twodrl_envs.nomad.sensors import NoiseModel, exact_ranges, normalise, realistic_readings
 
 OFFICE = load_map()

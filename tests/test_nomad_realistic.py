@@ -9,7 +9,7 @@ import pytest
 import twodrl_envs  # noqa: F401
 from twodrl_envs.nomad import sensors
 from twodrl_envs.nomad.core import office_core
-from twodrl_envs.nomad.geometry import load_map
+from twodrl_envs.nomad.maps import load_map
 from twodrl_envs.nomad.realistic import RealisticModel, Surface
 
 PLASTER = Surface("plaster", 0.9, 7.5, 1.0)

@@ -16,7 +16,8 @@ from sb3_twodrl import TwoDimA2C
 from sb3_twodrl.common.buffers import td_errors_and_gae
 from sb3_twodrl.common.splitting import SPLIT_MODES, make_reward_split, split_rewards
 from twodrl_envs.memorable.database import default_database_path, load_database
-from twodrl_envs.nomad.geometry import default_map_path, load_map
+from twodrl_envs.nomad.geometry import default_map_path
+from twodrl_envs.nomad.maps import load_map
 
 FAST = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 SLOWER = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])

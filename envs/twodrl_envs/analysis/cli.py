@@ -26,7 +26,8 @@ from twodrl_envs.analysis.dilemma import distance_to_goal
 from twodrl_envs.analysis.recording import record_database
 from twodrl_envs.memorable.database import import_csv, load_database, save_database
 from twodrl_envs.nomad.core import OfficeCore, office_core
-from twodrl_envs.nomad.geometry import SHIPPED_MAPS, OfficeMap, map_data
+from twodrl_envs.nomad.geometry import SHIPPED_MAPS, OfficeMap
+from twodrl_envs.nomad.maps import map_data
 from twodrl_envs.nomad.realistic import RealisticModel
 from twodrl_envs.nomad.sensors import NoiseModel
 

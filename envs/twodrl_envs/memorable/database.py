@@ -21,7 +21,8 @@ import numpy as np
 
 from twodrl_envs.nomad import sensors
 from twodrl_envs.nomad.core import OfficeCore, office_core
-from twodrl_envs.nomad.geometry import ROBOT_RADIUS_CM, SHIPPED_MAPS, STEP_CM, OfficeMap, map_data, map_source
+from twodrl_envs.nomad.geometry import ROBOT_RADIUS_CM, SHIPPED_MAPS, STEP_CM, OfficeMap
+from twodrl_envs.nomad.maps import map_data, map_source
 from twodrl_envs.nomad.sensors import HIGH_CM, LOW_CM
 
 SCHEMA_VERSION = 1
@@ -38,7 +39,7 @@ def _xy(xy: Any) -> str:
 def default_database_path(map: str | Path | None = None) -> Path:
     """The database shipped for a shipped map (realistic sensor model, K = 8); others get the office's.
 
-    ``map`` as :func:`twodrl_envs.nomad.geometry.map_source` takes it: ``None``/``"office"`` is the default
+    ``map`` as :func:`twodrl_envs.nomad.maps.map_source` takes it: ``None``/``"office"`` is the default
     office (``office_k8.npz``), a name in :data:`~twodrl_envs.nomad.geometry.SHIPPED_MAPS` its ``<name>_k8.npz``.
     """
     source = map_source(map)

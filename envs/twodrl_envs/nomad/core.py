@@ -32,11 +32,10 @@ from twodrl_envs.nomad.geometry import (
     build_lattice,
     check_goal_reachable,
     is_generated,
-    load_map,
-    map_source,
     reachable_from,
     swept_clearance,
 )
+from twodrl_envs.nomad.maps import load_map, map_source
 from twodrl_envs.nomad.sensors import NoiseModel
 
 GOAL_REWARD = 5.0  # r_R, eq. 11
@@ -106,7 +105,7 @@ def office_core(map_path: str | Path | None = None) -> OfficeCore:
     """The (cached) :class:`OfficeCore` of a map file; ``None`` is the shipped office, ``"generated:SIZE:SEED"``
     a generated one (:mod:`twodrl_envs.nomad.generator`).
 
-    Every env loads its map here: the file is validated (:func:`~twodrl_envs.nomad.geometry.load_map`) and
+    Every env loads its map here: the file is validated (:func:`~twodrl_envs.nomad.maps.load_map`) and
     its goal must be reachable from the start on the lattice
     (:func:`~twodrl_envs.nomad.geometry.check_goal_reachable`), else ``ValueError``.
     """

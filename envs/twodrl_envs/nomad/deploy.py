@@ -16,7 +16,7 @@ import torch
 from torch import nn
 
 from twodrl_envs.nomad import sensors
-from twodrl_envs.nomad.geometry import load_map
+from twodrl_envs.nomad.maps import load_map
 
 
 class RawObservation(nn.Module):

@@ -25,7 +25,8 @@ from typing import Any
 import numpy as np
 
 from twodrl_envs.nomad.core import Robot
-from twodrl_envs.nomad.geometry import MAPS_DIR, map_source
+from twodrl_envs.nomad.geometry import MAPS_DIR
+from twodrl_envs.nomad.maps import map_source
 
 PAPER_MAPS = ("office", "open")
 """Shipped maps of the paper's experiment: their task is the registered defaults (:func:`task_facts` gives None)."""
