@@ -36,7 +36,7 @@ def _axis_through_a_wall_end(office_walls: np.ndarray, origin: np.ndarray, beari
     return bool(np.any((across < 1e-6) & (ends @ axis > 0)))
 
 
-@pytest.mark.parametrize("map_name", [None, "generated:S:3"])
+@pytest.mark.parametrize("map_name", [None, "generated:S:3", "generated:M:5", "corridor"])
 def test_ideal_readings_at_lattice_points_equal_the_exact_ranges(map_name: str | None) -> None:
     """At every reachable lattice point, the artifact-free ray casts equal ``sensors.exact_ranges`` (saturated):
     sonar within the sonar's resolution (an inch), IR within 0.05 cm, except an IR axis through a wall's end."""
