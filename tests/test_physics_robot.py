@@ -20,7 +20,7 @@ from tests.cloned_policy import cloned_model, reaches_goal
 from twodrl_bench.trials import trial_outcomes
 from twodrl_envs.nomad.core import office_core
 from twodrl_envs.nomad.geometry import MOVES_CM, ROBOT_RADIUS_CM, clearance, swept_clearance
-from twodrl_envs.nomad.physics import MuJoCoRobot
+from twodrl_envs.nomad.physics import SPEED_CM_S, TIMESTEP_S, MuJoCoRobot
 from twodrl_envs.nomad.realistic import INCH_CM
 from twodrl_envs.nomad.sensors import BEARINGS, HIGH_CM
 
@@ -213,3 +213,24 @@ def test_a_policys_trials_on_both_stand_ins_are_counted_and_repeat() -> None:
     assert stand_in_trials(model, 2, seed=3) == counts
     with pytest.raises(ValueError, match=r"n must be a positive int, got 0"):
         stand_in_trials(model, 0)
+
+
+@pytest.mark.slow
+def test_a_long_drive_never_enters_a_wall_and_collides_only_by_contact() -> None:
+    """3,000 random moves over a generated office: the robot's centre never comes nearer a wall than its radius less
+    one physics step's travel (the depth at which the contact is found), and every collision the env reports is a
+    contact in MuJoCo."""
+    env = gym.make(ID, map="generated:M:5")
+    robot, walls = env.unwrapped.robot, env.unwrapped.core.office.walls
+    rng = np.random.default_rng(0)
+    env.reset(seed=0)
+    collisions = 0
+    for _ in range(3000):
+        _, _, terminated, truncated, info = env.step(int(rng.integers(4)))
+        assert clearance(robot.position_cm()[None], walls)[0] > ROBOT_RADIUS_CM - SPEED_CM_S * TIMESTEP_S
+        if info["collision"]:
+            collisions += 1
+            assert robot.contact
+        if terminated or truncated:
+            env.reset()
+    assert collisions > 50
