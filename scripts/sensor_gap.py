@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from twodrl_envs.analysis.gap import k_convergence, odometry_errors, systematic_difference
-from twodrl_envs.analysis.recording import shortest_paths
+from twodrl_envs.memorable.recording import shortest_paths
 from twodrl_envs.nomad.core import office_core
 from twodrl_envs.nomad.realistic import RealisticModel
 from twodrl_envs.nomad.sensors import BEARINGS, N_SONAR, exact_ranges

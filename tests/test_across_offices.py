@@ -54,7 +54,7 @@ def test_a_recorded_database_is_the_stand_in_robots_recording() -> None:
     import gymnasium as gym
 
     import twodrl_envs  # noqa: F401
-    from twodrl_envs.analysis.recording import record_database
+    from twodrl_envs.memorable.recording import record_database
     from twodrl_envs.nomad.realistic import RealisticModel
 
     env = gym.make("NomadOfficeMemorable-v0", map="corridor", database="recorded:2:7")

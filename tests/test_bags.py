@@ -14,8 +14,8 @@ pytest.importorskip("rosbags")
 
 from twodrl_envs.analysis.bags import import_bag, read_bag, write_bag
 from twodrl_envs.analysis.cli import main
-from twodrl_envs.analysis.recording import record_database
 from twodrl_envs.memorable.database import SensorDatabase, load_database
+from twodrl_envs.memorable.recording import record_database
 from twodrl_envs.nomad.core import office_core
 from twodrl_envs.nomad.realistic import RealisticModel
 

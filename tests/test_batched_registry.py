@@ -10,8 +10,8 @@ import pytest
 from gymnasium.envs.registration import load_env_creator
 
 import twodrl_envs  # noqa: F401  (registers the IDs)
-from twodrl_envs.analysis.recording import record_database
 from twodrl_envs.memorable.database import SensorDatabase
+from twodrl_envs.memorable.recording import record_database
 from twodrl_envs.nomad.realistic import RealisticModel
 from twodrl_zoo.vec_env import has_batched_env, make_train_env
 

@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 
 import twodrl_envs  # noqa: F401  (registers the IDs)
 from twodrl_envs.analysis.dilemma import distance_to_goal
-from twodrl_envs.analysis.recording import record_database
 from twodrl_envs.memorable.database import save_database
+from twodrl_envs.memorable.recording import record_database
 from twodrl_envs.nomad import generator
 from twodrl_envs.nomad.core import office_core
 from twodrl_envs.nomad.generator import SIZES, generate_map, shortest_path_moves

@@ -6,7 +6,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from twodrl_envs.analysis.recording import record_database
 from twodrl_envs.memorable.database import (
     CSV_COLUMNS,
     SCHEMA_VERSION,
@@ -14,6 +13,7 @@ from twodrl_envs.memorable.database import (
     load_database,
     save_database,
 )
+from twodrl_envs.memorable.recording import record_database
 from twodrl_envs.nomad.core import office_core
 from twodrl_envs.nomad.geometry import default_map_path
 from twodrl_envs.nomad.realistic import RealisticModel

@@ -7,9 +7,9 @@ from gymnasium.utils.env_checker import check_env
 
 from tests.test_nomad_batched import assert_batched_equals_singles
 from twodrl_envs import MAX_EPISODE_STEPS
-from twodrl_envs.analysis.recording import record_database
 from twodrl_envs.memorable.database import SensorDatabase
 from twodrl_envs.memorable.env import BatchedNomadOfficeMemorable, NomadOfficeMemorableEnv
+from twodrl_envs.memorable.recording import record_database
 from twodrl_envs.nomad.core import office_core
 from twodrl_zoo.vec_env import make_train_env
 

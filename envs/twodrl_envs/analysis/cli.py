@@ -23,8 +23,8 @@ import numpy as np
 
 from twodrl_envs.analysis.bags import IR_TOPIC, ODOMETRY_TOPIC, POSE_FRAMES, SONAR_TOPIC, import_bag
 from twodrl_envs.analysis.dilemma import distance_to_goal
-from twodrl_envs.analysis.recording import record_database
 from twodrl_envs.memorable.database import import_csv, load_database, save_database
+from twodrl_envs.memorable.recording import record_database
 from twodrl_envs.nomad.core import OfficeCore, office_core
 from twodrl_envs.nomad.geometry import SHIPPED_MAPS, OfficeMap
 from twodrl_envs.nomad.maps import map_data

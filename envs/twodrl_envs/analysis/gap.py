@@ -51,11 +51,11 @@ def odometry_errors(model: RealisticModel, moves: int, robots: int, seed: int, s
 def k_convergence(core: OfficeCore, model: RealisticModel, ks: tuple[int, ...], reference: int, seed: int) -> dict:
     """How many recorded readings per cell (K) a database needs to show a cell's typical sonar reading.
 
-    Records ``reference`` tours by dead reckoning (:func:`twodrl_envs.analysis.recording.drive_and_record`)
+    Records ``reference`` tours by dead reckoning (:func:`twodrl_envs.memorable.recording.drive_and_record`)
     and returns, per ``K`` in ``ks``, the share of (reachable cell, sonar) pairs whose median over the
     first ``K`` readings differs by more than 50 cm from the median over all ``reference`` readings.
     """
-    from twodrl_envs.analysis.recording import drive_and_record
+    from twodrl_envs.memorable.recording import drive_and_record
 
     counts, per_cell, _ = drive_and_record(core, model, reference, seed)
     cells = [r[:, :16] for r, c in zip(per_cell, counts, strict=True) if c >= reference]

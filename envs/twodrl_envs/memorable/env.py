@@ -28,7 +28,7 @@ RECORDED = "recorded:"
 def recorded(core: OfficeCore, database: str) -> SensorDatabase:
     """The database ``"recorded:K:SEED"`` names: ``K`` readings per cell recorded in ``core``'s map by the stand-in
     robot of ``NomadOfficeReal-v0`` driving by dead reckoning, with ``seed``
-    (:func:`~twodrl_envs.analysis.recording.record_database`, as ``sb3-twodrl-record-database --k K --seed SEED``
+    (:func:`~twodrl_envs.memorable.recording.record_database`, as ``sb3-twodrl-record-database --k K --seed SEED``
     records it); made once per process and map.
 
     :raises ValueError: naming ``database``, if K or SEED is not an int (K >= 1, SEED >= 0)
@@ -43,7 +43,7 @@ def recorded(core: OfficeCore, database: str) -> SensorDatabase:
 
 @functools.lru_cache(maxsize=4)
 def _recorded(source: str, k: int, seed: int) -> SensorDatabase:
-    from twodrl_envs.analysis.recording import record_database
+    from twodrl_envs.memorable.recording import record_database
     from twodrl_envs.nomad.realistic import RealisticModel
 
     return record_database(k, map=source, model=RealisticModel(), seed=seed)
