@@ -128,6 +128,19 @@ def _transfer(transfer: Any, save_model: bool) -> dict[str, Any]:
     return transfer
 
 
+def _stand_ins(stand_ins: Any) -> dict[str, Any]:
+    """``{trials, seed, env_kwargs}`` of the trials on both stand-in robots (seed defaults to the transfer's)."""
+    key = "protocol.stand_ins"
+    if not isinstance(stand_ins, dict) or not {"trials"} <= set(stand_ins) <= {"trials", "seed", "env_kwargs"}:
+        raise ValueError(f"{key} must be {{trials: <int>, seed: <int>, env_kwargs: <mapping>}}, got {stand_ins!r}")
+    if not isinstance(stand_ins.get("env_kwargs", {}), dict):
+        raise ValueError(f"{key}.env_kwargs must be a mapping, got {stand_ins['env_kwargs']!r}")
+    positive_int(f"{key}.trials", stand_ins["trials"])
+    stand_ins = {**stand_ins, "seed": stand_ins.get("seed", TRANSFER_SEED)}
+    positive_int(f"{key}.seed", stand_ins["seed"], zero=True)
+    return stand_ins
+
+
 @dataclass(frozen=True)
 class TimestepsProtocol:
     """A budget of ``timesteps`` (None: the entry's ``n_timesteps``) trained by rl-zoo3, then ``eval_episodes``
@@ -145,6 +158,7 @@ class TimestepsProtocol:
     check_episodes: int = 5
     keep_learned: bool = False
     transfer: dict[str, Any] | None = None
+    stand_ins: dict[str, Any] | None = None
 
     module: ClassVar[str] = "twodrl_bench.timesteps"
     extendable: ClassVar[tuple[str, ...]] = ()
@@ -169,6 +183,8 @@ class TimestepsProtocol:
             raise ValueError("protocol.keep_learned needs protocol.check_every > 0 (the checks it keeps from)")
         if self.transfer is not None:
             object.__setattr__(self, "transfer", _transfer(self.transfer, True))
+        if self.stand_ins is not None:
+            object.__setattr__(self, "stand_ins", _stand_ins(self.stand_ins))
 
     @classmethod
     def from_mapping(cls, raw: dict[str, Any]) -> TimestepsProtocol:
@@ -184,6 +200,8 @@ class TimestepsProtocol:
             del out["check_every"], out["check_episodes"]
         if not self.keep_learned:
             del out["keep_learned"]
+        if self.stand_ins is None:
+            del out["stand_ins"]
         return out
 
 

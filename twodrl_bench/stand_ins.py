@@ -30,3 +30,12 @@ def stand_in_trials(
 
     import_gym_packages()  # the env packages that register the IDs
     return {env_id: tally(_outcomes(model, env_id, n, seed, dict(env_kwargs or {}))) for env_id in STAND_INS}
+
+
+ROBOT_COLUMNS = {"NomadOfficeMuJoCo-v0": "mujoco", "NomadOfficeReal-v0": "real"}
+"""The column prefix of each stand-in robot in a row."""
+
+
+def stand_in_columns(counts: dict[str, dict[str, int]]) -> dict[str, int]:
+    """A row's columns of :func:`stand_in_trials`' counts: ``mujoco_success``, ``real_collision``, ..."""
+    return {f"{ROBOT_COLUMNS[env_id]}_{outcome}": n for env_id, tally in counts.items() for outcome, n in tally.items()}

@@ -28,6 +28,10 @@ Keys this job reads, beside the fields every spec has:
   first step after the rollout's check).
 - ``protocol.transfer`` (optional): ``{env, trials, seed, env_kwargs}``, the final policy's deterministic trials on
   another env (:func:`twodrl_bench.trials.transfer_columns`, paper section 3.5), columns ``transfer_*``.
+- ``protocol.stand_ins`` (optional): ``{trials, seed, env_kwargs}``, the final policy's deterministic trials from
+  the map's start on both stand-in robots, the physics one and the artifact model
+  (:func:`twodrl_bench.stand_ins.stand_in_trials`, needs ``sb3-twodrl[mujoco]``), columns ``<robot>_<outcome>``
+  (``mujoco_success``, ``real_collision``, ...).
 - ``env_kwargs``: the job's (``{seed}`` in a value is its seed). Where the env derives settings from them
   (:func:`twodrl_bench.settings.derived`: a map other than the paper's), they apply as ``sb3-twodrl-train``
   applies them: its hyperparameters under the arm's ``override``, its training options under ``env_kwargs``, its
@@ -65,6 +69,7 @@ from twodrl_bench.experiment import Arm, Experiment, Job, with_seed
 from twodrl_bench.protocol import TimestepsProtocol
 from twodrl_bench.settings import check_entry, derived, timesteps_entry
 from twodrl_bench.settings import settings_file as settings_file_of
+from twodrl_bench.stand_ins import stand_in_columns, stand_in_trials
 from twodrl_bench.trials import transfer_columns
 from twodrl_zoo.hyperparams import resolve
 from twodrl_zoo.manager import PATIENCE, SUCCESS_THRESHOLD
@@ -392,6 +397,10 @@ def run(job: Job) -> list[Row]:
     transfer = (
         transfer_columns(model, env, env_kwargs, with_seed(protocol.transfer, job.seed)) if protocol.transfer else {}
     )
+    if protocol.stand_ins:
+        stand_ins = with_seed(protocol.stand_ins, job.seed)
+        counts = stand_in_trials(model, stand_ins["trials"], stand_ins["seed"], stand_ins.get("env_kwargs", env_kwargs))
+        transfer = {**transfer, **stand_in_columns(counts)}
     found = len(train_eps) > 0
     learned_coefficient = getattr(model, "ent_coef_auto", False)
     course = {"ent_coef_course": json.dumps(model.ent_coef_course)} if learned_coefficient else {}
