@@ -95,6 +95,15 @@ def table(runs: dict[str, list[dict[str, float]]]) -> str:
     return "\n".join(lines)
 
 
+def error_bar(values: list[float], count: bool) -> tuple[float, list[list[float]] | None] | None:
+    """A bar's height and its error bar (below, above the mean; never negative) for ``values`` (:func:`interval`;
+    ``count``: a share of runs, a Wilson interval); None without values, no bar where the interval is undefined."""
+    mean, low, high, n = interval(values, count=count)
+    if not n:
+        return None
+    return mean, None if math.isnan(low) else [[max(mean - low, 0.0)], [max(high - mean, 0.0)]]
+
+
 def figure(frames: dict[str, Any], runs: dict[str, list[dict[str, float]]], path: Path) -> None:
     """Bars of the per-arm metrics with their intervals, and each arm's mean test goal rate per epoch."""
     import matplotlib
@@ -107,10 +116,9 @@ def figure(frames: dict[str, Any], runs: dict[str, list[dict[str, float]]], path
     fig, axes = plt.subplots(1, len(METRICS) + 1, figsize=(3.6 * (len(METRICS) + 1), 3.6))
     for ax, key in zip(axes, METRICS, strict=False):
         for i, arm in enumerate(arms):
-            mean, low, high, n = interval([r[key] for r in runs[arm]], count=key == "learned")
-            if n:
-                error = None if math.isnan(low) else [[max(mean - low, 0.0)], [max(high - mean, 0.0)]]
-                ax.bar(i, mean, yerr=error, capsize=4, color=palette(i))
+            bar = error_bar([r[key] for r in runs[arm]], count=key == "learned")
+            if bar is not None:
+                ax.bar(i, bar[0], yerr=bar[1], capsize=4, color=palette(i))
         ax.set_xticks(range(len(arms)), arms, rotation=40, ha="right")
         ax.set_title(key)
     ax = axes[-1]

@@ -29,7 +29,7 @@ from twodrl_zoo.zoo import (
     sample_twodppo_params,
 )
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 ZOO_ENVS = ["NomadOffice-v0", "NomadOfficeMemorable-v0", "CartPole-v1", "Acrobot-v1"]
 ALGOS = ["a2c", "twoda2c", "ppo", "twodppo"]
 

@@ -20,7 +20,7 @@ import yaml
 
 from tests.recording_cpu import RECORDING_KERNELS, WHY
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 COMMITTED = ROOT / "results" / "quick_preset" / "rows.csv"
 TIMINGS = ("wall_s",)
 

@@ -5,7 +5,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-LIBRARY = Path(__file__).resolve().parents[1] / "sb3_twodrl"
+LIBRARY = Path(__file__).resolve().parents[2] / "sb3_twodrl"
 PROGRAM = """
 import json, sys
 import sb3_twodrl

@@ -1,5 +1,5 @@
 """One checkpoint-and-resume scheme for every job: a killed timesteps job resumes with the uninterrupted row (the
-epoch jobs' case is in tests/test_experiments.py), and a checkpoint of another run is refused naming the key."""
+epoch jobs' case is in tests/bench/test_experiments.py), and a checkpoint of another run is refused naming the key."""
 
 from __future__ import annotations
 

@@ -238,6 +238,6 @@ def test_a_spec_without_a_report_writes_rows_only_and_report_names_the_missing_f
 @pytest.mark.parametrize("study", ["quick_preset", "auto_entropy"])
 def test_a_committed_studys_report_rebuilds_its_table_from_its_results_folder(tmp_path, study, capsys) -> None:
     """``sb3-twodrl-bench report <study> --runs results``: a folder without rows files reads its ``rows.csv``."""
-    results = Path(__file__).parents[1] / "results"
+    results = Path(__file__).parents[2] / "results"
     cli.main(["report", study, "--runs", str(results), "--out", str(tmp_path)])
     assert (tmp_path / "table.md").read_bytes() == (results / study / "table.md").read_bytes()

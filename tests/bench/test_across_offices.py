@@ -21,7 +21,7 @@ from twodrl_bench.protocol import protocol_of
 from twodrl_bench.reports import Part, find_parts, report_parts
 from twodrl_bench.reports.across_offices import comparison, pairs
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 STUDY = ROOT / "results" / "across_offices"
 RULES = {
     "claim": "twoda2c",

@@ -11,7 +11,7 @@ from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
 from sb3_twodrl.common.policies import TEMPERATURE_ARGUMENTS
-from tests.test_sb3_contract import policy_save_load
+from tests.library.test_sb3_contract import policy_save_load
 from tests.toy_envs import LatticeCorridor
 from twodrl_bench.algorithms import algo_class
 from twodrl_bench.algorithms.variants import (
@@ -120,7 +120,7 @@ ROWS = [  # (arm, seed): one row per kind of variant, its epoch 1
     ("paper", 0),  # actor_update="log_prob"
     ("relative_bounded", 0),
 ]
-VARIANT_ROWS = Path(__file__).parent / "data" / "variant_rows.csv"
+VARIANT_ROWS = Path(__file__).parents[1] / "data" / "variant_rows.csv"
 """Epoch 1 of each of :data:`ROWS`, made by 01db862's ``sb3-twodrl-ablation --arms <arm> --seeds <seed> --epochs 1``
 (the variants before they moved onto the library's extension points) under MKL's reproducible kernels; the study's
 committed rows were made on another machine and differ bitwise from what this one gives."""

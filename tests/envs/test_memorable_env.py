@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from tests.test_nomad_batched import assert_batched_equals_singles
+from tests.envs.test_nomad_batched import assert_batched_equals_singles
 from twodrl_envs import MAX_EPISODE_STEPS
 from twodrl_envs.memorable.database import SensorDatabase
 from twodrl_envs.memorable.env import BatchedNomadOfficeMemorable, NomadOfficeMemorableEnv

@@ -6,7 +6,7 @@ import pytest
 from stable_baselines3.common.env_checker import check_env
 
 import twodrl_envs  # noqa: F401  (registers the IDs)
-from tests.test_nomad_batched import assert_batched_equals_singles
+from tests.envs.test_nomad_batched import assert_batched_equals_singles
 from twodrl_envs.memorable.env import BatchedNomadOfficeMemorable
 from twodrl_envs.nomad.batched import BatchedNomadOffice
 from twodrl_envs.nomad.core import office_core

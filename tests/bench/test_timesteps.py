@@ -26,7 +26,7 @@ from twodrl_bench.timesteps import (
     training_episodes,
 )
 
-OLD_ROWS = Path(__file__).parent / "data" / "timesteps_old_rows.json"
+OLD_ROWS = Path(__file__).parents[1] / "data" / "timesteps_old_rows.json"
 TASKS = ("CliffWalking", "LunarLander", "LavaGap", "CartPole", "Acrobot", "Pendulum")
 
 
@@ -110,7 +110,7 @@ def test_spec_entries_are_the_settings_the_committed_rows_ran_with(task: str) ->
     """``results/benchmark/<task>/settings.json`` recorded each arm's rl-zoo3 entry (the budget in the entry);
     the spec resolves to the same entries (its budget in ``protocol.timesteps``) and evaluation episodes."""
     spec = load_spec(f"benchmark/{task}")
-    recorded = json.loads((Path(__file__).parents[1] / "results" / "benchmark" / task / "settings.json").read_text())
+    recorded = json.loads((Path(__file__).parents[2] / "results" / "benchmark" / task / "settings.json").read_text())
     for arm, settings in recorded.items():
         kept = json.loads(settings)
         entry = resolve_arm(spec["arms"][arm], spec["env"], spec["protocol"])

@@ -79,6 +79,8 @@ def test_tiny_ablation_end_to_end(tmp_path: Path) -> None:
 def test_the_figure_takes_arms_whose_every_seed_learned(tmp_path: Path) -> None:
     """10 of 10 seeds learned: the interval's upper end equals the mean up to rounding (no negative error bar)."""
     learned = [ablation.summarize_run(rows([0.2, 1.0, 1.0], [0.1, 0.1, 0.1])) for _ in range(10)]
+    height, extents = ablation.error_bar([r["learned"] for r in learned], count=True)
+    assert height == 1.0 and extents is not None and extents[1] == [0.0] and extents[0][0] > 0.0
     frames = {"a2c": pd.DataFrame({"epoch": [1, 2, 3], "goal_rate": [0.2, 1.0, 1.0]})}
-    ablation.figure(frames, {"a2c": learned}, tmp_path / "ablation.png")
-    assert (tmp_path / "ablation.png").exists()
+    ablation.figure(frames, {"a2c": learned}, tmp_path / "ablation.png")  # matplotlib takes the bar as it is
+    assert (tmp_path / "ablation.png").stat().st_size > 0

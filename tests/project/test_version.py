@@ -11,7 +11,7 @@ import sb3_twodrl
 
 tomllib = pytest.importorskip("tomllib")  # Python 3.11+
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_pyproject_reads_the_version_from_the_package() -> None:

@@ -118,6 +118,6 @@ def test_a_callable_that_returns_no_pair_is_an_error(result: Any) -> None:
 
 @pytest.mark.parametrize("page", ["README.md", "docs/twodim_a2c.md"])
 def test_the_argument_table_lists_every_mode(page: str) -> None:
-    text = (Path(__file__).resolve().parent.parent / page).read_text()
+    text = (Path(__file__).resolve().parents[2] / page).read_text()
     row = next(line for line in text.splitlines() if line.startswith("| `reward_split` |"))
     assert [mode for mode in SPLIT_MODES if f'`"{mode}"`' not in row] == []

@@ -24,7 +24,7 @@ from twodrl_bench.reports.benchmark import report, verdict
 from twodrl_bench.timesteps import resolve_arm, run_job
 
 TASKS = ("CliffWalking", "LunarLander", "LavaGap", "CartPole", "Acrobot", "Pendulum")
-RESULTS = Path(__file__).parents[1] / "results" / "benchmark"
+RESULTS = Path(__file__).parents[2] / "results" / "benchmark"
 
 
 def load_spec(task: str) -> dict[str, Any]:

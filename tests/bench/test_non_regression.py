@@ -21,7 +21,7 @@ from twodrl_bench.timesteps import resolve_arm, run_job
 from twodrl_zoo.hyperparams import hyperparams_path, read_entry
 
 ENVS = ("CartPole-v1", "Acrobot-v1", "Pendulum-v1")
-RESULTS = Path(__file__).parents[1] / "results" / "non_regression"
+RESULTS = Path(__file__).parents[2] / "results" / "non_regression"
 
 
 def load_spec(env: str) -> dict[str, Any]:

@@ -27,7 +27,7 @@ from twodrl_bench.runner import run_study
 
 ray = pytest.importorskip("ray", reason="Ray is absent (extra 'cluster')")
 psutil = pytest.importorskip("psutil")
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def free_ports(n: int) -> list[int]:
