@@ -200,8 +200,6 @@ class TimestepsProtocol:
             del out["check_every"], out["check_episodes"]
         if not self.keep_learned:
             del out["keep_learned"]
-        if self.stand_ins is None:
-            del out["stand_ins"]
         return out
 
 
