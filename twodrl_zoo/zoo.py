@@ -20,8 +20,7 @@ from collections.abc import Callable
 from importlib.metadata import entry_points
 from typing import Any
 
-from sb3_twodrl.a2c import TwoDimA2C
-from sb3_twodrl.ppo import TwoDimPPO
+from sb3_twodrl import ALGOS
 from twodrl_zoo.hyperparams import PACKAGED, hyperparams_path
 
 __all__ = [
@@ -107,12 +106,14 @@ def sample_twodppo_params(trial: Any, n_actions: int, n_envs: int, additional_ar
     return {**params, **two_dim}
 
 
-ZOO_ALGOS: dict[str, type] = {"twoda2c": TwoDimA2C, "twodppo": TwoDimPPO}
-"""The 2D-RL algorithms by their rl-zoo3 names."""
 ZOO_SAMPLERS: dict[str, Callable[..., dict[str, Any]]] = {
     "twoda2c": sample_twoda2c_params,
     "twodppo": sample_twodppo_params,
 }
+"""The Optuna search space of each 2D-RL algorithm, by its name in :data:`sb3_twodrl.ALGOS`."""
+ZOO_ALGOS: dict[str, type] = {name: ALGOS[name] for name in ZOO_SAMPLERS}
+"""The 2D-RL algorithms by their rl-zoo3 names: the library's table (:data:`sb3_twodrl.ALGOS`), whose stock
+entries (``a2c``, ``ppo``) rl-zoo3 has already."""
 
 
 def register_zoo() -> None:
