@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 import twodrl_envs  # noqa: F401  (registers NomadOffice-v0, for its task facts)
+from twodrl_bench.folders import append_row
 from twodrl_bench.intervals import wilson
 from twodrl_zoo.hyperparams import task_facts
 from twodrl_zoo.recipe import size_class
@@ -48,6 +49,24 @@ DATABASE_FIELDS = (*FIELDS, "db_goal_rate")
 LINE = re.compile(r"goal rate (\d\.\d\d) \((\d+) of (\d+)")
 STAND_IN = re.compile(r"^goal rate on the stand-in robot: (\d\.\d\d)", re.MULTILINE)
 DOC = Path(__file__).resolve().parents[1] / "docs" / "own_office.md"
+
+
+def _row(map_: str, size: str, moves: int, algo: str, seed: int, rate: float, record: dict) -> dict[str, object]:
+    """A row's columns from the command's goal rate and its ``goal_checks.json`` record."""
+    return {
+        "map": map_,
+        "size": size,
+        "moves": moves,
+        "algo": algo,
+        "seed": seed,
+        "goal_rate": rate,
+        "learned": rate >= 0.8,
+        "stopped_learned": record["learned_at"] is not None,
+        "kept_at": record["kept"]["timesteps"] if record["kept"] else "",
+        "steps": record["num_timesteps"],
+        "budget": record["n_timesteps"],
+        "train_s": record["train_s"],
+    }
 
 
 def doc_database_path() -> tuple[list[str], str]:
@@ -82,19 +101,11 @@ def run_database(map_: str, commit: str, cpu: str) -> dict[str, object]:
     rate = float(STAND_IN.search(drive.stdout).group(1))  # type: ignore[union-attr]
     facts = task_facts("NomadOffice-v0", {"map": map_})
     assert facts is not None
+    seed = int(re.search(r"^Seed: (\d+)$", out, re.MULTILINE).group(1))  # type: ignore[union-attr]
     return {
-        "map": map_,
-        "size": size_class(facts["shortest_path"]),
-        "moves": facts["shortest_path"],
-        "algo": "twoda2c-database",
-        "seed": int(re.search(r"^Seed: (\d+)$", out, re.MULTILINE).group(1)),  # type: ignore[union-attr]
-        "goal_rate": rate,
-        "learned": rate >= 0.8,
-        "stopped_learned": record["learned_at"] is not None,
-        "kept_at": record["kept"]["timesteps"] if record["kept"] else "",
-        "steps": record["num_timesteps"],
-        "budget": record["n_timesteps"],
-        "train_s": record["train_s"],
+        **_row(
+            map_, size_class(facts["shortest_path"]), facts["shortest_path"], "twoda2c-database", seed, rate, record
+        ),
         "wall_s": round(wall, 1),
         "commit": commit,
         "cpu": cpu,
@@ -119,23 +130,8 @@ def run(algo: str, map_: str, commit: str, cpu: str) -> dict[str, object]:
     rate = float(LINE.search(done.stdout).group(1))  # type: ignore[union-attr]
     facts = task_facts("NomadOffice-v0", {} if map_ == "office" else {"map": map_})
     moves = 17 if facts is None else facts["shortest_path"]
-    return {
-        "map": map_,
-        "size": "paper" if facts is None else size_class(moves),
-        "moves": moves,
-        "algo": algo,
-        "seed": seed,
-        "goal_rate": rate,
-        "learned": rate >= 0.8,
-        "stopped_learned": record["learned_at"] is not None,
-        "kept_at": record["kept"]["timesteps"] if record["kept"] else "",
-        "steps": record["num_timesteps"],
-        "budget": record["n_timesteps"],
-        "train_s": record["train_s"],
-        "wall_s": round(wall, 1),
-        "commit": commit,
-        "cpu": cpu,
-    }
+    size = "paper" if facts is None else size_class(moves)
+    return {**_row(map_, size, moves, algo, seed, rate, record), "wall_s": round(wall, 1), "commit": commit, "cpu": cpu}
 
 
 def table(rows: list[dict[str, str]]) -> str:
@@ -234,12 +230,7 @@ def main() -> None:
                 continue
             row = run_database(map_, commit, cpu) if args.database else run(algo, map_, commit, cpu)
             print(" | ".join(str(row[f]) for f in fields), flush=True)
-            new = not args.out.exists()
-            with args.out.open("a", newline="") as f:
-                writer = csv.DictWriter(f, fieldnames=fields)
-                if new:
-                    writer.writeheader()
-                writer.writerow(row)
+            append_row(args.out, fields, row)
 
 
 if __name__ == "__main__":

@@ -25,6 +25,7 @@ from stable_baselines3.common.callbacks import BaseCallback
 
 import twodrl_envs  # noqa: F401  (registers the IDs)
 from sb3_twodrl import ALGOS
+from twodrl_bench.folders import append_row
 from twodrl_bench.intervals import wilson
 from twodrl_envs.nomad.core import office_core
 from twodrl_zoo import hyperparams
@@ -182,12 +183,7 @@ def main() -> None:
             row = run(algo, map_, args.seed, args.eval_every)
             print(" | ".join(str(row[f]) for f in fields), flush=True)
             if args.out is not None:
-                new = not args.out.exists()
-                with args.out.open("a", newline="") as f:
-                    writer = csv.DictWriter(f, fieldnames=fields)
-                    if new:
-                        writer.writeheader()
-                    writer.writerow(row)
+                append_row(args.out, tuple(fields), row)
 
 
 if __name__ == "__main__":

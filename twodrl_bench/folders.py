@@ -34,6 +34,16 @@ def write_rows(path: Path, rows: list[Row]) -> None:
     atomic_write_bytes(path, buf.getvalue().encode())
 
 
+def append_row(path: Path, fields: tuple[str, ...], row: Row) -> None:
+    """Append ``row`` (its ``fields``) to the CSV ``path``, with the header where the file is new (scripts' rows)."""
+    new = not path.exists()
+    with path.open("a", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=fields)
+        if new:
+            writer.writeheader()
+        writer.writerow(row)
+
+
 def read_spec(folder: str | Path) -> Spec | None:
     """The resolved spec stored in ``folder`` (None if there is none)."""
     path = Path(folder) / "spec.yml"
