@@ -24,7 +24,6 @@ from __future__ import annotations
 import argparse
 import csv
 import json
-import os
 import platform
 import re
 import subprocess
@@ -120,12 +119,12 @@ def run(algo: str, map_: str, commit: str, cpu: str) -> dict[str, object]:
         command += ["--env-kwargs", f'map:"{map_}"']
     with tempfile.TemporaryDirectory() as folder:
         clock = time.perf_counter()
-        done = subprocess.run(command, cwd=folder, capture_output=True, text=True, env={**os.environ})
+        done = subprocess.run(command, cwd=folder, capture_output=True, text=True)
         wall = time.perf_counter() - clock
-        (record_file,) = Path(folder).glob("logs/*/*/goal_checks.json") or [None]
-        if done.returncode != 0 or record_file is None:
+        records = list(Path(folder).glob("logs/*/*/goal_checks.json"))
+        if done.returncode != 0 or len(records) != 1:
             raise RuntimeError(f"{' '.join(command)} failed:\n{done.stdout[-2000:]}\n{done.stderr[-2000:]}")
-        record = json.loads(record_file.read_text())
+        record = json.loads(records[0].read_text())
     seed = int(re.search(r"^Seed: (\d+)$", done.stdout, re.MULTILINE).group(1))  # type: ignore[union-attr]
     rate = float(LINE.search(done.stdout).group(1))  # type: ignore[union-attr]
     facts = task_facts("NomadOffice-v0", {} if map_ == "office" else {"map": map_})

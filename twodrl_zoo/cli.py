@@ -97,6 +97,8 @@ def check_command_line(prog: str, argv: list[str]) -> dict[str, dict[str, Any]]:
         sys.exit(f"{prog}: env {env_id!r} is not registered" + (f"; did you mean {close[0]!r}?" if close else ""))
     if env_id is not None:
         for option in ("--env-kwargs", "--eval-env-kwargs"):
+            if option == "--eval-env-kwargs" and not given[option]:
+                continue  # the env of --env-kwargs, made just above
             try:
                 gym.make(env_id, **{**given["--env-kwargs"], **given[option]}).close()
             except (ValueError, TypeError, FileNotFoundError) as error:

@@ -30,7 +30,7 @@ from typing import Any
 from rl_zoo3.callbacks import SaveVecNormalizeCallback
 from rl_zoo3.exp_manager import ExperimentManager as ZooExperimentManager
 from stable_baselines3.common.base_class import BaseAlgorithm
-from stable_baselines3.common.vec_env import VecEnv, VecMonitor
+from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecMonitor
 
 from sb3_twodrl.callbacks import GoalCheckCallback
 from twodrl_zoo.hyperparams import derived_settings, resolve
@@ -87,7 +87,7 @@ class ExperimentManager(ZooExperimentManager):
     def create_envs(self, n_envs: int, eval_env: bool = False, no_log: bool = False) -> VecEnv:
         """The batch of the registry's vector entry point where there is one (module docstring), else rl-zoo3's."""
         plain = self.env_wrapper is None and self.vec_env_wrapper is None and self.frame_stack is None
-        if not (plain and self.vec_env_class.__name__ == "DummyVecEnv" and has_batched_env(self.env_name.gym_id)):
+        if not (plain and self.vec_env_class is DummyVecEnv and has_batched_env(self.env_name.gym_id)):
             return super().create_envs(n_envs, eval_env, no_log)
         options = self.eval_env_kwargs if eval_env else self.env_kwargs
         env: VecEnv = make_train_env(self.env_name.gym_id, n_envs, self.seed, "batched", options)
