@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a checkout without installing
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "envs"))  # the env package, envs/twodrl_envs/
 
 from twodrl_envs import MAX_EPISODE_STEPS
 from twodrl_envs.analysis.dilemma import goal_probabilities, measure, properties, wall_avoiding_policy
