@@ -112,11 +112,16 @@ def run_database(map_: str, commit: str, cpu: str) -> dict[str, object]:
     }
 
 
-def run(algo: str, map_: str, commit: str, cpu: str) -> dict[str, object]:
-    """One run of the command on ``map_`` (``"office"``: the paper's office, no ``--env-kwargs``)."""
+def run(
+    algo: str, map_: str, commit: str, cpu: str, seed: int | None = None, checks: Path | None = None
+) -> dict[str, object]:
+    """One run of the command on ``map_`` (``"office"``: the paper's office, no ``--env-kwargs``), with ``--seed
+    seed`` where given; its ``goal_checks.json`` record appended to ``checks`` (JSON lines) where given."""
     command = ["sb3-twodrl-train", "--algo", algo, "--env", "NomadOffice-v0"]
     if map_ != "office":
         command += ["--env-kwargs", f'map:"{map_}"']
+    if seed is not None:
+        command += ["--seed", str(seed)]
     with tempfile.TemporaryDirectory() as folder:
         clock = time.perf_counter()
         done = subprocess.run(command, cwd=folder, capture_output=True, text=True)
@@ -127,6 +132,9 @@ def run(algo: str, map_: str, commit: str, cpu: str) -> dict[str, object]:
         record = json.loads(records[0].read_text())
     seed = int(re.search(r"^Seed: (\d+)$", done.stdout, re.MULTILINE).group(1))  # type: ignore[union-attr]
     rate = float(LINE.search(done.stdout).group(1))  # type: ignore[union-attr]
+    if checks is not None:
+        with checks.open("a") as f:
+            f.write(json.dumps({"map": map_, "algo": algo, "seed": seed, **record}, default=str) + "\n")
     facts = task_facts("NomadOffice-v0", {} if map_ == "office" else {"map": map_})
     moves = 17 if facts is None else facts["shortest_path"]
     size = "paper" if facts is None else size_class(moves)
@@ -200,6 +208,8 @@ def main() -> None:
     parser.add_argument("--sizes", nargs="*", default=[], help="size classes of generated maps (S, M, L)")
     parser.add_argument("--map-seeds", nargs="*", type=int, default=[], help="generated map seeds")
     parser.add_argument("--algos", nargs="+", default=["twoda2c"])
+    parser.add_argument("--seeds", nargs="*", type=int, default=[], help="training seeds (default: none, drawn)")
+    parser.add_argument("--checks", type=Path, help="JSON lines file to append each run's goal_checks.json to")
     parser.add_argument("--database", action="store_true", help="docs/own_office.md's database path (TwoDimA2C)")
     parser.add_argument("--out", type=Path, help="CSV to append rows to")
     parser.add_argument("--table", type=Path, nargs="+", help="print the table of rows CSVs and exit")
@@ -218,18 +228,22 @@ def main() -> None:
     done = set()
     if args.out.exists():
         with args.out.open(newline="") as f:
-            done = {(r["map"], r["algo"]) for r in csv.DictReader(f)}
+            done = {(r["map"], r["algo"], r["seed"] if args.seeds else None) for r in csv.DictReader(f)}
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
     cpu = next((line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo") if "model name" in line), "")
     cpu = cpu or platform.processor()
     fields = DATABASE_FIELDS if args.database else FIELDS
     for map_ in maps:
         for algo in ["twoda2c-database"] if args.database else args.algos:
-            if (map_, algo) in done:
-                continue
-            row = run_database(map_, commit, cpu) if args.database else run(algo, map_, commit, cpu)
-            print(" | ".join(str(row[f]) for f in fields), flush=True)
-            append_row(args.out, fields, row)
+            for seed in args.seeds or [None]:
+                if (map_, algo, None if seed is None else str(seed)) in done:
+                    continue
+                if args.database:
+                    row = run_database(map_, commit, cpu)
+                else:
+                    row = run(algo, map_, commit, cpu, seed, args.checks)
+                print(" | ".join(str(row[f]) for f in fields), flush=True)
+                append_row(args.out, fields, row)
 
 
 if __name__ == "__main__":
