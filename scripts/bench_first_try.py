@@ -172,6 +172,40 @@ def table(rows: list[dict[str, str]]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _learned_by(record: dict, steps: float) -> bool:
+    """Whether a check of the run ``record`` (``goal_checks.json``) up to ``steps`` reached 0.8."""
+    return any(c["goal_rate"] >= 0.8 for c in record["checks"] if c["timesteps"] <= steps)
+
+
+def restart_table(records: list[dict], fractions: tuple[float, ...] = (0.2, 0.3, 0.4, 0.5)) -> str:
+    """The offline analysis of a restart when no check reached the goal by ``f`` of the budget
+    (``results/reliability/preregistration.md``): per map, each seed's run as the first attempt and the other's,
+    cut to the budget left, as the restart; the learned share and the mean steps spent, against no restart."""
+    runs: dict[str, list[dict]] = {}
+    for record in records:
+        runs.setdefault(record["map"], []).append(record)
+    pairs = [(a, b) for group in runs.values() if len(group) == 2 for a, b in (group, group[::-1])]
+    lines = ["| restart at (share of budget) | learned | mean steps |", "| --- | --- | --- |"]
+    for fraction in (None, *fractions):
+        learned, steps = 0, 0.0
+        for first, second in pairs:
+            budget = first["n_timesteps"]
+            cut = None
+            if fraction is not None:
+                late = [c["timesteps"] for c in first["checks"] if c["timesteps"] >= fraction * budget]
+                early = [c for c in first["checks"] if c["timesteps"] <= (late[0] if late else budget)]
+                cut = late[0] if late and max(c["goal_rate"] for c in early) == 0.0 else None
+            if cut is None:
+                learned += _learned_by(first, budget)
+                steps += first["num_timesteps"]
+            else:
+                learned += _learned_by(second, budget - cut)
+                steps += cut + min(second["num_timesteps"], budget - cut)
+        name = "no restart" if fraction is None else f"{fraction:.1f}"
+        lines.append(f"| {name} | {learned}/{len(pairs)} | {steps / max(len(pairs), 1):,.0f} |")
+    return "\n".join(lines) + "\n"
+
+
 def plot(rows: list[dict[str, str]], path: Path) -> None:
     """Wall seconds of the whole command against the office's shortest path, per arm; offices below 0.8 hollow."""
     import matplotlib
@@ -214,7 +248,12 @@ def main() -> None:
     parser.add_argument("--out", type=Path, help="CSV to append rows to")
     parser.add_argument("--table", type=Path, nargs="+", help="print the table of rows CSVs and exit")
     parser.add_argument("--plot", type=Path, help="with --table: also draw wall seconds against shortest path here")
+    parser.add_argument("--restarts", type=Path, nargs="+", help="print the restart analysis of --checks files")
     args = parser.parse_args()
+    if args.restarts is not None:
+        records = [json.loads(line) for path in args.restarts for line in path.read_text().splitlines()]
+        print(restart_table(records), end="")
+        return
     if args.table is not None:
         rows = []
         for path in args.table:
