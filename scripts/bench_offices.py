@@ -20,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 import torch as th
-from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.vec_env import VecEnv
 
 import twodrl_envs  # noqa: F401  (registers the IDs)
 from sb3_twodrl import ALGOS
@@ -31,34 +31,20 @@ from twodrl_envs.nomad.core import office_core
 from twodrl_zoo import hyperparams
 from twodrl_zoo.recipe import size_class
 from twodrl_zoo.vec_env import make_test_env, make_train_env
+from twodrl_zoo.zoo import goal_rate, run_episodes
 
 ENV = "NomadOffice-v0"
 TEST_EPISODES = 20
 FIELDS = ("map", "size", "moves", "algo", "seed", "learned", "train_s", "train_cpu_s", "steps", "goal_rate", "budget")
 
 
-def goal_rate(model: BaseAlgorithm, test_env: object, steps: int) -> float:
-    """Goal rate of ``TEST_EPISODES`` deterministic episodes from the map's start (one per test env)."""
-    obs = test_env.reset()
-    done_at = np.zeros(TEST_EPISODES, dtype=bool)
-    success = np.zeros(TEST_EPISODES, dtype=bool)
-    for _ in range(steps):
-        actions, _ = model.predict(obs, deterministic=True)
-        obs, _, dones, infos = test_env.step(actions)
-        new = dones & ~done_at
-        success[new] = [bool(infos[i].get("is_success")) for i in np.flatnonzero(new)]
-        done_at |= dones
-        if done_at.all():
-            break
-    return float(success.mean())
-
-
 class LearnedStop(BaseCallback):
-    """Evaluates every ``every`` steps; stops at a goal rate >= 0.8, timing training apart from evaluation."""
+    """Every ``every`` steps, the goal rate of one deterministic episode from the map's start per test env
+    (:func:`twodrl_zoo.zoo.run_episodes`); stops at a goal rate >= 0.8, timing training apart from evaluation."""
 
-    def __init__(self, test_env: object, every: int, limit: int) -> None:
+    def __init__(self, test_env: VecEnv, every: int) -> None:
         super().__init__()
-        self.test_env, self.every, self.limit = test_env, every, limit
+        self.test_env, self.every = test_env, every
         self.train_s, self.train_cpu_s, self.rate, self.learned_steps = 0.0, 0.0, 0.0, -1
         self._next, self._since, self._cpu_since = every, 0.0, 0.0
 
@@ -75,7 +61,7 @@ class LearnedStop(BaseCallback):
             return True
         self._next += self.every
         self.pause()
-        self.rate = goal_rate(self.model, self.test_env, self.limit)
+        self.rate = goal_rate(run_episodes(self.model, self.test_env))
         self._on_training_start()
         if self.rate >= 0.8:
             self.learned_steps = self.num_timesteps
@@ -87,16 +73,15 @@ def run(algo: str, map_: str, seed: int, eval_every: int) -> dict[str, object]:
     facts = hyperparams.task_facts(ENV, {"map": map_})
     assert facts is not None, f"{map_}: the paper's maps derive no settings"
     hp = hyperparams.load(algo, ENV, env_kwargs={"map": map_})  # the packaged entry with the derived settings
-    limit = hp.eval_env_kwargs["max_episode_steps"]
     env = make_train_env(ENV, hp.n_envs, seed, "batched", hp.env_kwargs)
     test_env = make_test_env(ENV, TEST_EPISODES, "batched", hp.eval_env_kwargs)
     test_env.seed(seed)
     model = ALGOS[algo](hp.policy, env, seed=seed, device="cpu", **hp.kwargs)
-    stop = LearnedStop(test_env, eval_every, limit)
+    stop = LearnedStop(test_env, eval_every)
     model.learn(hp.n_timesteps, callback=stop)
     if stop.learned_steps < 0:  # the budget ran out between evaluations: one last one
         stop.pause()
-        stop.rate = goal_rate(model, test_env, limit)
+        stop.rate = goal_rate(run_episodes(model, test_env))
     return {
         "map": map_,
         "size": size_class(facts["shortest_path"]),

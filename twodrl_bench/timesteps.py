@@ -73,6 +73,7 @@ from twodrl_bench.stand_ins import stand_in_columns, stand_in_trials
 from twodrl_bench.trials import transfer_columns
 from twodrl_zoo.hyperparams import resolve
 from twodrl_zoo.manager import PATIENCE, SUCCESS_THRESHOLD
+from twodrl_zoo.zoo import goal_rate, run_episodes
 
 Row = dict[str, Any]
 EVAL_SEED = 10**6
@@ -138,28 +139,21 @@ def learning_curve(episodes: np.ndarray, n_timesteps: int, bins: int = CURVE_BIN
 
 
 def evaluate(model: Any, env: Any, episodes: int, events: str | None) -> dict[str, float]:
-    """Mean return, length and punishment events of ``episodes`` deterministic episodes, the share with an event,
-    the share that reached the goal (``info["is_success"]``, NaN where the env does not say) and the reward per
-    step over all their steps (paper section 3.4.1)."""
-    results: list[tuple[float, int, float, float]] = []
-    obs = env.reset()
-    total, length = 0.0, 0
-    while len(results) < episodes:
-        action, _ = model.predict(obs, deterministic=True)
-        obs, reward, done, info = env.step(action)
-        total, length = total + float(reward[0]), length + 1
-        if done[0]:
-            event = float(info[0].get(events, 0.0)) if events else 0.0
-            results.append((total, length, event, float(info[0].get("is_success", math.nan))))
-            total, length = 0.0, 0
-    r, n, e, g = (np.array(x) for x in zip(*results, strict=True))
+    """Mean return, length and punishment events of ``episodes`` deterministic episodes in a row on the one-env
+    ``env`` (:func:`twodrl_zoo.zoo.run_episodes`), the share with an event, the share that reached the goal
+    (:func:`twodrl_zoo.zoo.goal_rate`, NaN where the env does not say) and the reward per step over all their steps
+    (paper section 3.4.1)."""
+    ran = run_episodes(model, env, per_env=episodes)
+    r = np.array([episode.episode_return for episode in ran])
+    n = np.array([episode.length for episode in ran])
+    e = np.array([float(episode.info.get(events, 0.0)) if events else 0.0 for episode in ran])
     return {
         "final_return": float(r.mean()),
         "final_return_std": float(r.std()),
         "final_length": float(n.mean()),
         "final_events": float(e.mean()),
         "final_event_share": float(np.mean(e > 0)),
-        "final_success_share": float(g.mean()),
+        "final_success_share": goal_rate(ran),
         "final_reward_per_step": float(r.sum() / n.sum()),
     }
 

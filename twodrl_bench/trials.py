@@ -11,67 +11,51 @@ import torch as th
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.vec_env import VecEnv
 
-from sb3_twodrl.callbacks import EpisodeRecord, EpisodeTracker, summarize_episodes
+from sb3_twodrl.callbacks import summarize_episodes
 from twodrl_bench.protocol import PAPER_TRIALS, ROUTES, TRANSFER_SEED
 from twodrl_bench.settings import test_env_kwargs
+from twodrl_zoo.zoo import Episode, run_episodes
 
 OWN_TRIALS = 10
 """Trials of a transferred policy in its own training env (did it learn at all?)."""
 
 
+def seeded_trials(model: BaseAlgorithm, test_env: VecEnv, seed: int, deterministic: bool = True) -> list[Episode]:
+    """One trial per sub-env of ``test_env`` (:func:`twodrl_zoo.zoo.run_episodes`), in sub-env order: sub-env ``i``
+    reset with seed ``seed + i``, the policy sampling with torch seeded by ``seed`` in a forked generator (the
+    caller's torch state untouched)."""
+    with th.random.fork_rng(devices=[]):
+        th.manual_seed(seed)
+        test_env.seed(seed)
+        return run_episodes(model, test_env, deterministic=deterministic)
+
+
 def run_test_trials(model: BaseAlgorithm, test_env: VecEnv, seed: int, deterministic: bool = False) -> dict[str, float]:
     """Metrics (:func:`~sb3_twodrl.callbacks.summarize_episodes`, a share for each of :data:`~.protocol.ROUTES`)
-    of one trial per sub-env of ``test_env``.
+    of one trial per sub-env of ``test_env`` (:func:`seeded_trials`).
 
-    Sub-env ``i`` is reset with seed ``seed + i``; the policy samples with torch, numpy and Python
-    generators seeded by ``seed``, and the caller's generator states are restored afterwards, so a
-    test never perturbs the learning run. A sub-env that finished its trial keeps stepping (the
-    batch moves together) but is not counted again.
+    The numpy and Python generators are seeded by ``seed`` too and the caller's states restored afterwards, so a
+    test never perturbs the learning run.
     """
-    n = test_env.num_envs
     np_state, py_state = np.random.get_state(), random.getstate()
     try:
-        with th.random.fork_rng(devices=[]):
-            th.manual_seed(seed)
-            np.random.seed(seed % 2**32)
-            random.seed(seed)
-            test_env.seed(seed)
-            obs = test_env.reset()
-            tracker = EpisodeTracker(n)
-            records: list[EpisodeRecord | None] = [None] * n
-            while any(r is None for r in records):
-                actions, _ = model.predict(obs, deterministic=deterministic)
-                obs, rewards, dones, infos = test_env.step(actions)
-                ended = np.flatnonzero(dones).tolist()
-                for i, record in zip(ended, tracker.step(infos, dones, rewards), strict=True):
-                    if records[i] is None:
-                        records[i] = record
+        np.random.seed(seed % 2**32)
+        random.seed(seed)
+        episodes = seeded_trials(model, test_env, seed, deterministic)
     finally:
         np.random.set_state(np_state)
         random.setstate(py_state)
-    return summarize_episodes((r for r in records if r is not None), ROUTES)
+    return summarize_episodes((episode.record for episode in episodes), ROUTES)
 
 
 def trial_outcomes(model: BaseAlgorithm, test_env: VecEnv, seed: int, deterministic: bool = True) -> list[str]:
-    """The outcome of one trial per sub-env of ``test_env``, in sub-env order (sub-env ``i`` seeded ``seed + i``).
+    """The outcome of one trial per sub-env of ``test_env`` (:func:`seeded_trials`), in sub-env order.
 
     ``"shortcut"`` or ``"detour"`` (the goal, by that route), ``"goal"`` (the goal, no route label),
     ``"collision"`` or ``"timeout"``.
     """
-    n = test_env.num_envs
-    with th.random.fork_rng(devices=[]):
-        th.manual_seed(seed)
-        test_env.seed(seed)
-        obs = test_env.reset()
-        ends: list[dict[str, Any] | None] = [None] * n
-        while any(o is None for o in ends):
-            actions, _ = model.predict(obs, deterministic=deterministic)
-            obs, _, dones, infos = test_env.step(actions)
-            for i in np.flatnonzero(dones):
-                if ends[i] is None:
-                    ends[i] = infos[i]
     outcomes = []
-    for info in ends:  # every trial has ended
+    for info in (episode.info for episode in seeded_trials(model, test_env, seed, deterministic)):
         if info.get("is_success"):
             outcomes.append(info["route"] if info.get("route") in ROUTES else "goal")
         else:

@@ -107,7 +107,8 @@ def check_command_line(prog: str, argv: list[str]) -> dict[str, dict[str, Any]]:
 
 
 def report_goal_rate(argv: list[str], given: dict[str, dict[str, Any]], episodes: int = 20) -> float | None:
-    """Run ``episodes`` deterministic test episodes of the model ``train`` just saved; print the goal rate.
+    """Run ``episodes`` deterministic test episodes of the model ``train`` just saved
+    (:func:`twodrl_zoo.zoo.run_episodes`); print the goal rate.
 
     The test env is the run's evaluation env (``goal_checks.json``: the command's options with the task's test
     options, e.g. a map's start). The line says which policy it is: the goal check it was kept at (steps, goal rate)
@@ -115,13 +116,13 @@ def report_goal_rate(argv: list[str], given: dict[str, dict[str, Any]], episodes
     an env that never sets it gets no line (None). Below 0.8 the line says so and what to change.
     """
     import json
+    import math
     import os
 
-    import numpy as np
     from rl_zoo3.utils import ALGOS, create_test_env, get_latest_run_id, get_saved_hyperparams
 
     from twodrl_zoo.manager import CHECKS_FILE
-    from twodrl_zoo.zoo import _option_value
+    from twodrl_zoo.zoo import _option_value, goal_rate, run_episodes
 
     algo, env_id = _option_value(argv, "--algo") or "ppo", _option_value(argv, "--env") or "CartPole-v1"
     folder = _option_value(argv, "-f", "--log-folder") or "logs"
@@ -143,18 +144,11 @@ def report_goal_rate(argv: list[str], given: dict[str, dict[str, Any]], episodes
         env_kwargs=record["test_env_kwargs"] or {**given["--env-kwargs"], **given["--eval-env-kwargs"]},
     )
     model = ALGOS[algo].load(model_path, device="cpu")
-    goals: list[bool] = []
-    obs = env.reset()
-    while len(goals) < episodes:
-        assert not isinstance(obs, tuple), "tuple observations: SB3 predicts on arrays and dicts"
-        actions, _ = model.predict(obs, deterministic=True)
-        obs, _, dones, infos = env.step(actions)
-        if dones[0]:
-            if "is_success" not in infos[0]:
-                return None
-            goals.append(bool(infos[0]["is_success"]))
+    rate = goal_rate(run_episodes(model, env, per_env=episodes))
     env.close()
-    rate = float(np.mean(goals))
+    if math.isnan(rate):
+        return None
+    reached = round(rate * episodes)
     kept, learned = record["kept"], record["learned_at"] is not None
     which = (
         f"the policy of the check at {kept['timesteps']:,} steps (goal rate {kept['goal_rate']:.2f}), "
@@ -163,7 +157,7 @@ def report_goal_rate(argv: list[str], given: dict[str, dict[str, Any]], episodes
     )
     stop = "learned, stopped" if learned else "budget spent"
     print(
-        f"sb3-twodrl-train: goal rate {rate:.2f} ({sum(goals)} of {episodes} deterministic test episodes) of {which}"
+        f"sb3-twodrl-train: goal rate {rate:.2f} ({reached} of {episodes} deterministic test episodes) of {which}"
         f"trained {record['num_timesteps']:,} of {record['n_timesteps']:,} steps ({stop}) in {record['train_s']:.0f} s"
     )
     if rate < 0.8:
