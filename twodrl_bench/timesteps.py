@@ -326,14 +326,14 @@ def run(job: Job) -> list[Row]:
     import torch as th
     from rl_zoo3 import utils as zoo_utils
 
-    from twodrl_bench.algorithms.auto_entropy import AUTO_ENTROPY_ALGOS
+    from twodrl_bench.algorithms import ALGOS
     from twodrl_bench.checkpoint import set_rng_state
     from twodrl_zoo.zoo import register_zoo
 
     clock = time.perf_counter()
     experiment, protocol, arm = job.experiment, job.protocol, job.arm
     register_zoo()
-    zoo_utils.ALGOS.update(AUTO_ENTROPY_ALGOS)  # the bench's own baselines, beside the library's algorithms
+    zoo_utils.ALGOS.update(ALGOS)  # the bench's table: its names are rl-zoo3's classes where both have one
     if arm.algo not in zoo_utils.ALGOS:
         raise ValueError(f"arm algo must be one of rl-zoo3's {sorted(zoo_utils.ALGOS)}, got {arm.algo!r}")
     for package in experiment.gym_packages:

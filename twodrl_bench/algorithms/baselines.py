@@ -85,5 +85,5 @@ class BatchedPPO(PPO):
     policy_aliases: ClassVar[dict[str, type[BasePolicy]]] = {**PPO.policy_aliases, "MlpPolicy": FastActorCriticPolicy}
 
 
-BASELINE_ALGOS: dict[str, type] = {"a2c": BatchedA2C, "ppo": BatchedPPO}
-"""The stock arms by the experiment runner's names."""
+BASELINE_ALGOS: dict[str, type] = {"a2c_batched": BatchedA2C, "ppo_batched": BatchedPPO}
+"""The stock algorithms on the fast path, by the bench's names (``a2c`` and ``ppo`` are SB3's own classes)."""
