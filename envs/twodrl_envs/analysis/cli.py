@@ -25,7 +25,7 @@ from twodrl_envs.analysis.bags import IR_TOPIC, ODOMETRY_TOPIC, POSE_FRAMES, SON
 from twodrl_envs.analysis.dilemma import distance_to_goal
 from twodrl_envs.memorable.database import import_csv, load_database, save_database
 from twodrl_envs.memorable.recording import record_database
-from twodrl_envs.nomad.core import OfficeCore, office_core
+from twodrl_envs.nomad.core import ROUTE_CODES, OfficeCore, office_core
 from twodrl_envs.nomad.geometry import SHIPPED_MAPS, OfficeMap
 from twodrl_envs.nomad.maps import map_data
 from twodrl_envs.nomad.realistic import RealisticModel
@@ -84,7 +84,7 @@ def describe_map(core: OfficeCore) -> str:
         f"shortest path {moves:.0f} moves",
     ]
     if office.has_routes:
-        for name, code in (("shortcut", 1), ("detour", 2)):
+        for name, code in ROUTE_CODES.items():
             cells = int(((core.route_code == code) & lattice.reachable).sum())
             lines.append(f"  {name} region {_rect(office, name)}: {cells} reachable cells")
     else:

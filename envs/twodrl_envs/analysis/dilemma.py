@@ -1,7 +1,8 @@
 """The office's dilemma (paper section 3.3), measured exactly on the lattice before any learning.
 
 Every figure here is an exact expectation over ``NomadOffice-v0``'s lattice semantics (eq. 11-12
-evaluations, termination on collision or goal, truncation after ``time_limit`` steps), computed by
+evaluations, termination on collision or goal, truncation after ``time_limit`` steps: the core's
+:class:`~twodrl_envs.nomad.core.LatticeOutcomes` and route memory), computed by
 propagating probabilities over the free cells, not by sampling; ``tests/test_nomad_dilemma.py``
 checks them against walks of the batched env. Three walkers:
 
@@ -21,17 +22,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from twodrl_envs.nomad.core import COLLISION_PUNISHMENT, GOAL_REWARD, MOVE_PUNISHMENT, OfficeCore, goal_distances
-from twodrl_envs.nomad.geometry import clearance
+from twodrl_envs.nomad.core import ROUTE_CODES, LatticeOutcomes, OfficeCore, goal_distances, remembered_route
+from twodrl_envs.nomad.geometry import ROUTE_REGIONS, clearance
 
 GAMMA = 0.9  # the paper's reward discount (section 3.2)
-ROUTE_CODES = {"shortcut": 1, "detour": 2}
 
 
-def _route_code(route: str) -> int:
-    if route not in ROUTE_CODES:
-        raise ValueError(f"route must be 'shortcut' or 'detour', got {route!r}")
-    return ROUTE_CODES[route]
+def _other_route(route: str) -> int:
+    """The code of the route that is not ``route``."""
+    if route not in ROUTE_REGIONS:
+        raise ValueError(f"route must be one of {ROUTE_REGIONS}, got {route!r}")
+    return ROUTE_CODES[ROUTE_REGIONS[1 - ROUTE_REGIONS.index(route)]]
 
 
 def distance_to_goal(core: OfficeCore, route: str | None = None) -> np.ndarray:
@@ -39,7 +40,7 @@ def distance_to_goal(core: OfficeCore, route: str | None = None) -> np.ndarray:
 
     Along a route, the other route's label region is closed (its cells get ``inf``).
     """
-    passable = None if route is None else core.route_code != 3 - _route_code(route)
+    passable = None if route is None else core.route_code != _other_route(route)
     return goal_distances(core, core.lattice.moves, passable)
 
 
@@ -79,14 +80,11 @@ def wall_avoiding_policy(core: OfficeCore) -> np.ndarray:
 
 def expected_return(core: OfficeCore, policy: np.ndarray, time_limit: int, gamma: float = GAMMA) -> float:
     """Expected discounted return from the start of a Markov ``policy`` ``(n_cells, 4)`` (eq. 11-12 rewards)."""
-    moves = core.lattice.moves
-    safe = np.maximum(moves, 0)
-    collide = moves < 0
-    goal = core.goal[safe] & ~collide
-    value = np.zeros(len(moves))
+    out = LatticeOutcomes.of(core, core.lattice.moves)
+    ends = out.collided | out.goal
+    value = np.zeros(len(out.reward))
     for _ in range(time_limit):
-        after = np.where(goal, GOAL_REWARD - MOVE_PUNISHMENT, -MOVE_PUNISHMENT + gamma * value[safe])
-        value = (policy * np.where(collide, -COLLISION_PUNISHMENT, after)).sum(axis=1)
+        value = (policy * np.where(ends, out.reward, out.reward + gamma * value[out.next_cell])).sum(axis=1)
     return float(value[core.start_cell])
 
 
@@ -109,7 +107,7 @@ def goal_probabilities(core: OfficeCore, policy: np.ndarray, time_limits: tuple[
             ok = moves[:, a] >= 0
             nxt = safe[ok, a]
             flow = mass[ok] * policy[ok, a, None]
-            label = np.where(code[nxt, None] > 0, code[nxt, None], np.arange(3))
+            label = remembered_route(np.arange(3), code[nxt, None])
             np.add.at(new, (nxt[:, None], label), flow)
         at_goal = core.goal
         reached += new[at_goal].sum(axis=0)

@@ -7,6 +7,8 @@
   code, evaluations), computed from the move table by the rules above; the single env reads it with Python
   indices, the batched env with arrays.
 * :func:`continuous_move`: a move off the lattice (swept-disc collision test, bounds, route code, goal).
+* :data:`ROUTES` / :data:`ROUTE_CODES`: the route labels and their codes, :func:`route_code_at` and
+  :func:`remembered_route` (``info["route"]`` is the route region entered last).
 * :class:`Robot`: the one seam between the ideal, realistic and replay (MEMORABLE) robots: how a command
   moves the robot and what it reads. :class:`IdealRobot` is the simulator's.
 
@@ -26,6 +28,7 @@ from twodrl_envs.nomad import sensors
 from twodrl_envs.nomad.geometry import (
     MOVES_CM,
     ROBOT_RADIUS_CM,
+    ROUTE_REGIONS,
     STEP_CM,
     Lattice,
     OfficeMap,
@@ -41,8 +44,10 @@ from twodrl_envs.nomad.sensors import NoiseModel
 GOAL_REWARD = 5.0  # r_R, eq. 11
 COLLISION_PUNISHMENT = 1.0  # r_P on collision, eq. 12
 MOVE_PUNISHMENT = 0.01  # r_P for every (non-colliding) move, eq. 12
-ROUTES: tuple[str | None, ...] = (None, "shortcut", "detour")
-"""``info["route"]`` of route code 0, 1, 2."""
+ROUTES: tuple[str | None, ...] = (None, *ROUTE_REGIONS)
+"""``info["route"]`` of route code 0, 1, 2: none yet, then the map's route regions (``shortcut``, ``detour``)."""
+ROUTE_CODES = {name: code for code, name in enumerate(ROUTES) if name is not None}
+"""Route code of each route label."""
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _MASK64 = (1 << 64) - 1
 _START_SALT = 0x5851F42D4C957F2D
@@ -80,8 +85,17 @@ class OfficeCore:
 
 
 def route_code_at(office: OfficeMap, xy: np.ndarray) -> np.ndarray:
-    """Passage code (0 none, 1 shortcut, 2 detour) of centre positions ``(..., 2)``."""
-    return np.where(office.in_region("shortcut", xy), 1, np.where(office.in_region("detour", xy), 2, 0))
+    """Route code (:data:`ROUTE_CODES`, 0 none) of centre positions ``(..., 2)``; the first route region wins."""
+    code = np.zeros(np.shape(xy)[:-1], dtype=np.int64)
+    for name, value in reversed(ROUTE_CODES.items()):
+        code = np.where(office.in_region(name, xy), value, code)
+    return code
+
+
+def remembered_route(route: np.ndarray, code: np.ndarray) -> np.ndarray:
+    """Route codes after moves into cells of route ``code``: the code of a route region entered, else ``route``
+    (the one before). ``info["route"]`` is the label of the route region the robot's centre entered last."""
+    return np.where(code > 0, code, route)
 
 
 @cache

@@ -13,6 +13,8 @@ import numpy as np
 
 ROBOT_RADIUS_CM = 30.0
 STEP_CM = 10.0
+ROUTE_REGIONS = ("shortcut", "detour")
+"""The route regions' names, the route labels (:data:`twodrl_envs.nomad.core.ROUTES` gives their codes)."""
 
 
 @dataclass(frozen=True)
@@ -38,7 +40,7 @@ class OfficeMap:
     @property
     def has_routes(self) -> bool:
         """Whether the map labels routes (``shortcut`` and ``detour`` regions); without them no route is reported."""
-        return "shortcut" in self.regions
+        return ROUTE_REGIONS[0] in self.regions
 
     def in_region(self, name: str, xy: np.ndarray) -> np.ndarray:
         """True where a point ``(..., 2)`` lies in the named rectangle (nowhere for a region the map lacks)."""
@@ -55,7 +57,6 @@ def _in_rect(rect: tuple[float, float, float, float], xy: np.ndarray) -> np.ndar
 MAPS_DIR = Path(__file__).with_name("maps")
 SHIPPED_MAPS = ("office", "open", "corridor")
 """Built-in maps by name: ``office`` (the default, the dilemma), ``open`` (no dilemma), ``corridor`` (one route)."""
-ROUTE_REGIONS = ("shortcut", "detour")
 MAX_LATTICE_POINTS = 1_000_000
 """Largest lattice a map may span (bounds / 10 cm in x times in y): 100 m x 100 m."""
 

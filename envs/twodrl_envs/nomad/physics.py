@@ -40,7 +40,7 @@ import numpy as np
 
 from twodrl_envs.nomad import sensors
 from twodrl_envs.nomad.core import OfficeCore, Robot, counter_word, office_core
-from twodrl_envs.nomad.geometry import MOVES_CM, ROBOT_RADIUS_CM, STEP_CM, OfficeMap
+from twodrl_envs.nomad.geometry import MOVES_CM, REGION_KEYS, ROBOT_RADIUS_CM, STEP_CM, OfficeMap
 from twodrl_envs.nomad.office import NomadOfficeEnv, non_negative
 from twodrl_envs.nomad.realistic import RealisticModel
 from twodrl_envs.nomad.sensors import BEARINGS, N_SONAR, SONAR_HALF_ANGLE, SONAR_MAX_CM
@@ -100,7 +100,7 @@ def office_mjcf(office: OfficeMap) -> str:
             f' fromto="{_m(ax)} {_m(ay)} {z} {_m(bx)} {_m(by)} {z}" rgba="1 0 0 0"/>'
         )
     regions = []
-    for name, rgba in (("goal", ".2 .75 .3 .6"), ("shortcut", ".95 .75 .2 .35"), ("detour", ".3 .5 .95 .35")):
+    for name, rgba in zip(REGION_KEYS, (".2 .75 .3 .6", ".95 .75 .2 .35", ".3 .5 .95 .35"), strict=True):
         if name in office.regions:
             rx0, ry0, rx1, ry1 = office.regions[name]
             regions.append(

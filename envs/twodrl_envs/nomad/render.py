@@ -5,10 +5,11 @@ from __future__ import annotations
 import numpy as np
 
 from twodrl_envs.nomad import sensors
-from twodrl_envs.nomad.geometry import ROBOT_RADIUS_CM, OfficeMap, point_segment_distance
+from twodrl_envs.nomad.geometry import ROBOT_RADIUS_CM, ROUTE_REGIONS, OfficeMap, point_segment_distance
 
 _WHITE = (255, 255, 255)
-_REGION_COLOURS = {"shortcut": (255, 224, 178), "detour": (200, 225, 255), "goal": (190, 240, 190)}
+_REGION_COLOURS = dict(zip((*ROUTE_REGIONS, "goal"), ((255, 224, 178), (200, 225, 255), (190, 240, 190)), strict=True))
+"""Colour of each region, drawn in this order: the route regions (orange, blue), then the goal (green)."""
 _WALL = (30, 30, 30)
 _CONE = (255, 246, 160)
 _TRAIL = (220, 60, 60)
