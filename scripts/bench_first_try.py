@@ -37,7 +37,7 @@ import numpy as np
 import twodrl_envs  # noqa: F401  (registers NomadOffice-v0, for its task facts)
 from twodrl_bench.folders import append_row
 from twodrl_bench.intervals import wilson
-from twodrl_zoo.hyperparams import task_facts
+from twodrl_zoo.hyperparams import derived_settings, task_facts
 from twodrl_zoo.recipe import size_class
 
 FIELDS = (
@@ -113,15 +113,26 @@ def run_database(map_: str, commit: str, cpu: str) -> dict[str, object]:
 
 
 def run(
-    algo: str, map_: str, commit: str, cpu: str, seed: int | None = None, checks: Path | None = None
+    algo: str,
+    map_: str,
+    commit: str,
+    cpu: str,
+    seed: int | None = None,
+    checks: Path | None = None,
+    budget_factor: float | None = None,
 ) -> dict[str, object]:
     """One run of the command on ``map_`` (``"office"``: the paper's office, no ``--env-kwargs``), with ``--seed
-    seed`` where given; its ``goal_checks.json`` record appended to ``checks`` (JSON lines) where given."""
+    seed`` where given and ``-n`` ``budget_factor`` times the derived budget where given; its ``goal_checks.json``
+    record appended to ``checks`` (JSON lines) where given."""
     command = ["sb3-twodrl-train", "--algo", algo, "--env", "NomadOffice-v0"]
     if map_ != "office":
         command += ["--env-kwargs", f'map:"{map_}"']
     if seed is not None:
         command += ["--seed", str(seed)]
+    if budget_factor is not None:
+        derived = derived_settings("NomadOffice-v0", {"map": map_})
+        assert derived is not None, f"{map_} derives no budget"
+        command += ["-n", str(int(budget_factor * derived.hyperparams["n_timesteps"]))]
     with tempfile.TemporaryDirectory() as folder:
         clock = time.perf_counter()
         done = subprocess.run(command, cwd=folder, capture_output=True, text=True)
@@ -243,6 +254,7 @@ def main() -> None:
     parser.add_argument("--map-seeds", nargs="*", type=int, default=[], help="generated map seeds")
     parser.add_argument("--algos", nargs="+", default=["twoda2c"])
     parser.add_argument("--seeds", nargs="*", type=int, default=[], help="training seeds (default: none, drawn)")
+    parser.add_argument("--budget-factor", type=float, help="-n this times the derived budget (default: not given)")
     parser.add_argument("--checks", type=Path, help="JSON lines file to append each run's goal_checks.json to")
     parser.add_argument("--database", action="store_true", help="docs/own_office.md's database path (TwoDimA2C)")
     parser.add_argument("--out", type=Path, help="CSV to append rows to")
@@ -280,7 +292,7 @@ def main() -> None:
                 if args.database:
                     row = run_database(map_, commit, cpu)
                 else:
-                    row = run(algo, map_, commit, cpu, seed, args.checks)
+                    row = run(algo, map_, commit, cpu, seed, args.checks, args.budget_factor)
                 print(" | ".join(str(row[f]) for f in fields), flush=True)
                 append_row(args.out, fields, row)
 
