@@ -1,4 +1,5 @@
-"""BatchedNomadOffice == N single NomadOffice-v0 envs with the same seeds; the SB3 adapter."""
+"""BatchedNomadOffice == N single NomadOffice-v0 envs with the same seeds; the single env's fast path == the one
+definition of the episode (``twodrl_envs.nomad.episode``); the SB3 adapter."""
 
 import gymnasium as gym
 import numpy as np
@@ -26,6 +27,7 @@ def assert_batched_equals_singles(batched, singles, seed, actions) -> int:
             assert (r, te, tr) == (rewards[i], terminated[i], truncated[i])
             for key in ("route", "is_success", "punishment", "collision"):
                 assert inf[key] == info[key][i], key
+            assert inf["position_cm"] == tuple(info["position_cm"][i])
             if te or tr:
                 n_done += 1
                 np.testing.assert_array_equal(o, info["final_obs"][i])
@@ -42,6 +44,40 @@ def test_batched_equals_single_envs(sensor_noise, odometry):
     actions = np.random.default_rng(0).integers(4, size=(STEPS, N_ENVS))
     n_done = assert_batched_equals_singles(batched, singles, SEED, actions)
     assert n_done > N_ENVS  # autoreset was exercised
+
+
+# --- the single env's Python fast path on the lattice == Episodes' arrays -----------------------------------------
+
+FAST_PATH_ENVS = [
+    ("twodrl_envs:NomadOffice-v0", {}),
+    ("twodrl_envs:NomadOffice-v0", {"sensor_noise": True}),
+    ("twodrl_envs:NomadOffice-v0", {"sensor_noise": True, "observe_odometry": False}),
+    ("twodrl_envs:NomadOffice-v0", {"observation": "cell", "starts": "uniform"}),
+    ("twodrl_envs:NomadOffice-v0", {"step_sd_cm": 1.0, "starts": "uniform"}),
+    ("twodrl_envs:NomadOfficeMemorable-v0", {"starts": "uniform"}),
+]
+
+
+@pytest.mark.parametrize(("env_id", "kwargs"), FAST_PATH_ENVS)
+def test_single_env_fast_path_equals_the_one_definition(env_id, kwargs):
+    episodes = gym.make(env_id, **kwargs).unwrapped.episodes
+    rng = np.random.default_rng(4)
+    keys = rng.integers(0, 2**63, size=64, dtype=np.uint64)
+    start = episodes.start(keys)
+    for i, key in enumerate(keys.tolist()):
+        position, cell, route = episodes.start_one(key)
+        np.testing.assert_array_equal(position, start.positions[i])
+        assert (cell, route) == (start.cells[i], start.routes[i])
+    if not episodes.robot.on_lattice:
+        return
+    cells = np.flatnonzero(episodes.robot.moves.max(axis=1) >= 0)  # recorded / free cells
+    steps = rng.integers(0, 300, size=len(cells))
+    keys = rng.integers(0, 2**63, size=len(cells), dtype=np.uint64)
+    rows = np.ones(len(cells), dtype=bool)
+    centres = episodes.core.lattice.cells[cells]
+    observed = episodes.observe(rows, cells, centres, centres, keys, steps)
+    for i, (cell, key, step) in enumerate(zip(cells.tolist(), keys.tolist(), steps.tolist(), strict=True)):
+        np.testing.assert_array_equal(episodes.observe_one(cell, key, step), observed[i])
 
 
 def test_sb3_adapter_reports_terminal_observation_and_truncation():

@@ -7,7 +7,7 @@ from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 from twodrl_envs import MAX_EPISODE_STEPS
-from twodrl_envs.nomad.core import office_core
+from twodrl_envs.nomad.core import IdealRobot, office_core
 
 IDS = ["twodrl_envs:NomadOffice-v0", "twodrl_envs:NomadOfficeReal-v0"]
 N, E, S, W = 0, 1, 2, 3
@@ -143,6 +143,24 @@ def test_truncated_by_time_limit():
 def test_bad_constructor_arguments(kwargs, error, message):
     with pytest.raises(error, match=message):
         gym.make("twodrl_envs:NomadOffice-v0", **kwargs)
+
+
+@pytest.mark.parametrize(
+    ("env_id", "kwargs", "draws"),
+    [
+        ("twodrl_envs:NomadOffice-v0", {"step_sd_cm": 2.0, "slip_sd_cm": 1.0}, True),
+        ("twodrl_envs:NomadOffice-v0", {"sensor_noise": True}, False),
+        ("twodrl_envs:NomadOfficeReal-v0", {}, False),
+    ],
+)
+def test_only_the_ideal_robots_move_noise_draws_from_the_envs_generator(env_id, kwargs, draws):
+    env = gym.make(env_id, **kwargs).unwrapped
+    env.reset(seed=0)
+    before = env.np_random.bit_generator.state
+    env.step(N)
+    assert (env.np_random.bit_generator.state != before) == draws  # the others' randomness is counter-based
+    with pytest.raises(ValueError, match="generators"):
+        IdealRobot(env.core, step_sd_cm=1.0)  # move noise needs the envs' generators
 
 
 def test_bad_action_and_options():

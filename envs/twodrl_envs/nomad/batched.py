@@ -23,31 +23,11 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from twodrl_envs import MAX_EPISODE_STEPS
-from twodrl_envs.nomad.core import (
-    ROUTES,
-    IdealRobot,
-    OfficeCore,
-    Robot,
-    check_starts,
-    continuous_move,
-    episode_keys,
-    evaluations,
-    office_core,
-    route_code_at,
-    start_draws,
-)
-from twodrl_envs.nomad.geometry import MOVES_CM
-from twodrl_envs.nomad.office import (
-    check_observation,
-    check_progress,
-    non_negative,
-    observation_space,
-    sensor_noise_model,
-)
+from twodrl_envs.nomad.core import ROUTES, IdealRobot, OfficeCore, Robot, episode_keys, office_core, remembered_route
+from twodrl_envs.nomad.episode import RENDER_MODES, Episodes, base_key, non_negative, sensor_noise_model
 from twodrl_envs.nomad.sensors import NoiseModel
 
 _ROUTE_NAMES = np.array(ROUTES, dtype=object)
-_INFO_KEYS = ("punishment", "collision", "route", "position_cm", "is_success")
 
 
 class BatchedNomadOffice(VectorEnv):
@@ -61,9 +41,11 @@ class BatchedNomadOffice(VectorEnv):
 
     With ``step_sd_cm`` / ``slip_sd_cm`` the robots leave the lattice: each sub-env draws its move
     noise from its own generator, seeded as a single env's ``np_random``, in the single env's order.
+    The episode's start, moves, observation and ``info`` are :class:`~twodrl_envs.nomad.episode.Episodes`'
+    (:attr:`episodes`), as the single env's.
     """
 
-    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": ["rgb_array"]}
+    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": list(RENDER_MODES)}
 
     def __init__(
         self,
@@ -82,7 +64,8 @@ class BatchedNomadOffice(VectorEnv):
     ) -> None:
         core = office_core(map)
         noise = sensor_noise_model(sensor_noise)
-        robot = IdealRobot(core, noise, non_negative("step_sd_cm", step_sd_cm), non_negative("slip_sd_cm", slip_sd_cm))
+        step_sd, slip_sd = non_negative("step_sd_cm", step_sd_cm), non_negative("slip_sd_cm", slip_sd_cm)
+        robot = IdealRobot(core, noise, step_sd, slip_sd, self._generators)
         self._setup(
             num_envs, core, robot, observe_odometry, render_mode, max_episode_steps, observation, starts, progress
         )
@@ -104,24 +87,17 @@ class BatchedNomadOffice(VectorEnv):
             raise ValueError(f"num_envs must be a positive int, got {num_envs!r}")
         if isinstance(max_episode_steps, bool) or not isinstance(max_episode_steps, int) or max_episode_steps < 1:
             raise ValueError(f"max_episode_steps must be a positive int, got {max_episode_steps!r}")
-        if not isinstance(observe_odometry, bool):
-            raise TypeError(f"observe_odometry must be a bool, got {observe_odometry!r}")
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be None or one of {self.metadata['render_modes']}, got {render_mode!r}")
+        name = type(self).__name__
+        self.episodes = Episodes(core, robot, observe_odometry, render_mode, observation, starts, progress, name)
         self.core, self.robot, self.render_mode = core, robot, render_mode
-        self.observation = check_observation(observation, robot.on_lattice, type(self).__name__)
-        self.observe_odometry = observe_odometry
-        self.starts = check_starts(starts)
-        self.progress = check_progress(progress, robot)
-        self._outcomes = robot.outcomes(self.progress) if robot.on_lattice else None
-        self._start_cells = robot.start_cells
+        self.observation, self.observe_odometry = self.episodes.observation, observe_odometry
+        self.starts, self.progress = starts, self.episodes.progress
         self.num_envs = int(num_envs)
         self.max_episode_steps = max_episode_steps
-        self.single_observation_space = observation_space(core, observation, observe_odometry)
+        self.single_observation_space = self.episodes.observation_space
         self.single_action_space = spaces.Discrete(4)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
-        self._info_keys = tuple(k for k in _INFO_KEYS if k != "route" or core.office.has_routes)
         self._all = np.ones(self.num_envs, dtype=bool)
         self._all.flags.writeable = False
         self._cell = np.full(self.num_envs, core.start_cell)
@@ -130,14 +106,15 @@ class BatchedNomadOffice(VectorEnv):
         self._episode = np.zeros(self.num_envs, dtype=np.int64)
         self._base = np.zeros(self.num_envs, dtype=np.uint64)
         self._key = np.zeros(self.num_envs, dtype=np.uint64)
-        # continuous poses (off the lattice): true position, dead-reckoned odometry
-        self._start = np.array(core.office.start, dtype=np.float64)
-        self._start_route = int(route_code_at(core.office, self._start))
-        self._pos = np.repeat(self._start[None], self.num_envs, axis=0)
+        # robot centres (cm) and their dead-reckoned odometry (off the lattice; on it, the centres)
+        self._pos = np.repeat(np.array(core.office.start, dtype=np.float64)[None], self.num_envs, axis=0)
         self._odo = self._pos.copy()
         self._rngs: list[np.random.Generator] = []
         self._trajectories: list[list[tuple[float, float]]] = [[] for _ in range(self.num_envs)]
-        self._renderer: Any = None
+
+    def _generators(self) -> list[np.random.Generator]:
+        """The generators the ideal robot's move noise draws from: sub-env ``i``'s, seeded as a single env's."""
+        return self._rngs
 
     def reset(
         self, *, seed: int | Sequence[int | None] | None = None, options: dict[str, Any] | None = None
@@ -154,7 +131,7 @@ class BatchedNomadOffice(VectorEnv):
         self._np_random, self._np_random_seed = seeding.np_random(seeds[0])
         self._rngs = [self._np_random] + [seeding.np_random(s)[0] for s in seeds[1:]]
         for i, rng in enumerate(self._rngs):
-            self._base[i] = rng.integers(0, 2**63, size=1, dtype=np.uint64)[0]
+            self._base[i] = base_key(rng)
         self._episode[:] = 0
         self._key = episode_keys(self._base, self._episode)
         self._restart(self._all)
@@ -164,39 +141,16 @@ class BatchedNomadOffice(VectorEnv):
 
     def _restart(self, rows: np.ndarray) -> None:
         """Put the robots ``rows`` (bool mask) at the start of a new episode (as ``starts`` says)."""
-        if self.starts == "uniform":
-            cells = self._start_cells[start_draws(self._key[rows], len(self._start_cells))]
-            self._cell[rows] = cells
-            self._pos[rows] = self._odo[rows] = self.core.lattice.cells[cells]
-            self._route[rows] = self.core.route_code[cells]
-        else:
-            self._cell[rows] = self.core.start_cell
-            self._pos[rows] = self._start
-            self._odo[rows] = self._start
-            self._route[rows] = self._start_route
+        start = self.episodes.start(self._key[rows])
+        self._cell[rows], self._route[rows] = start.cells, start.routes
+        self._pos[rows] = self._odo[rows] = start.positions
         self._t[rows] = 0
         if self.render_mode is not None:
-            positions = self._positions()
             for i in np.flatnonzero(rows):
-                self._trajectories[i] = [tuple(positions[i])]
-
-    def _positions(self) -> np.ndarray:
-        """Robot centres ``(N, 2)`` in cm: the lattice cells' or the continuous poses."""
-        return self.core.lattice.cells[self._cell] if self.robot.on_lattice else self._pos
+                self._trajectories[i] = [tuple(self._pos[i])]
 
     def _observe(self, rows: np.ndarray) -> np.ndarray:
-        if self.observation == "cell":
-            return self._cell[rows]  # fancy indexing: a copy
-        if self.robot.on_lattice:
-            cells = self._cell[rows]
-            readings = self.robot.cell_readings(cells, self._key[rows], self._t[rows])
-            odometry = self.core.cell_odometry[cells]
-        else:
-            readings = self.robot.pose_readings(self._pos[rows], self._key[rows], self._t[rows])
-            odometry = self.core.odometry(self._odo[rows])
-        if not self.observe_odometry:
-            return readings  # fancy indexing or computed: a fresh array
-        return np.concatenate([readings, odometry], axis=1)
+        return self.episodes.observe(rows, self._cell, self._pos, self._odo, self._key, self._t)
 
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """Move every robot (eq. 11-12 evaluations); finished robots restart in the same call."""
@@ -205,27 +159,16 @@ class BatchedNomadOffice(VectorEnv):
             raise ValueError(f"actions must be {self.num_envs} integers in 0..3, got {actions!r}")
         actions = actions.astype(np.intp)
         self._t += 1
-        if self.robot.on_lattice:
-            outcomes, cells = self._outcomes, self._cell
-            assert outcomes is not None
-            collided, goal = outcomes.collided[cells, actions], outcomes.goal[cells, actions]
-            code, rewards = outcomes.code[cells, actions], outcomes.reward[cells, actions]
-            punishment = outcomes.punishment[cells, actions]
-            self._cell = outcomes.next_cell[cells, actions]
-        else:
-            shift = self.robot.displacement(actions, self._key, self._t, self._rngs)
-            target, collided, code, goal = continuous_move(self.core.office, self._pos, shift)
-            rewards, punishment = evaluations(collided, goal)
-            moved = ~collided
-            self._pos[moved] = target[moved]
-            self._odo[moved] += MOVES_CM[actions[moved]]
-        self._route = np.where(code > 0, code, self._route).astype(np.int8)
+        move = self.episodes.move(self._cell, self._pos, self._odo, actions, self._key, self._t)
+        self._cell, self._pos, self._odo = move.cells, move.positions, move.odometry
+        collided, goal, rewards, punishment = move.collided, move.goal, move.reward, move.punishment
+        self._route = remembered_route(self._route, move.code).astype(np.int8)
         terminated = collided | goal
         truncated = (self._t >= self.max_episode_steps) & ~terminated
         obs = self._observe(self._all)
         info = self._info(punishment, collided, goal)
         if self.render_mode is not None:
-            for trajectory, xy in zip(self._trajectories, self._positions(), strict=True):
+            for trajectory, xy in zip(self._trajectories, self._pos, strict=True):
                 trajectory.append(tuple(xy))
         done = terminated | truncated
         if done.any():
@@ -237,26 +180,14 @@ class BatchedNomadOffice(VectorEnv):
         return obs, rewards, terminated, truncated, info
 
     def _info(self, punishment: np.ndarray, collided: np.ndarray, goal: np.ndarray) -> dict[str, Any]:
-        values = {
-            "punishment": punishment,
-            "collision": collided,
-            "route": _ROUTE_NAMES[self._route],
-            "position_cm": self._positions().copy(),
-            "is_success": goal,
-        }
-        info: dict[str, Any] = {key: values[key] for key in self._info_keys}
-        info.update({f"_{key}": self._all for key in self._info_keys})
+        info = self.episodes.info(punishment, collided, _ROUTE_NAMES[self._route], self._pos.copy(), goal)
+        info.update({f"_{key}": self._all for key in self.episodes.info_keys})
         return info
 
     def render(self) -> tuple[np.ndarray, ...] | None:
         """One top-down RGB frame per sub-env (``render_mode="rgb_array"``), as each single env renders."""
         if self.render_mode != "rgb_array":
             return None
-        from twodrl_envs.nomad.render import OfficeRenderer
-
-        if self._renderer is None:
-            self._renderer = OfficeRenderer(self.core.office)
         return tuple(
-            self._renderer.frame(xy, trajectory)
-            for xy, trajectory in zip(self._positions(), self._trajectories, strict=True)
+            self.episodes.frame(xy, trajectory) for xy, trajectory in zip(self._pos, self._trajectories, strict=True)
         )

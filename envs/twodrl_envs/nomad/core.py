@@ -13,11 +13,13 @@
   moves the robot and what it reads. :class:`IdealRobot` is the simulator's.
 
 The envs (``office.NomadOfficeEnv``, ``batched.BatchedNomadOffice`` and their realistic and replay
-variants) hold episode state and the Gymnasium API; every rule they apply is here.
+variants) hold episode state and the Gymnasium API; :mod:`twodrl_envs.nomad.episode` applies these rules to
+their episodes, once for both.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import cache, cached_property
 from pathlib import Path
@@ -280,8 +282,8 @@ class Robot:
     On the lattice (``on_lattice``) a robot moves by the table ``moves`` (next cell or -1 for a
     collision) and reads :meth:`cell_readings`; off it, it moves by :meth:`displacement` and reads
     :meth:`pose_readings`. Per-step randomness comes from ``(episode key, step)`` counters or, for the
-    ideal robot's move noise, from each env's own generator (``rngs``), so N robots stepped in one call
-    equal N single ones.
+    ideal robot's move noise, from each env's own generator (which only :class:`IdealRobot` takes), so N robots
+    stepped in one call equal N single ones.
     """
 
     on_lattice: bool = True
@@ -322,10 +324,9 @@ class Robot:
         """Normalised readings ``(n, 32)`` at continuous poses ``(n, 2)``."""
         raise NotImplementedError(f"{type(self).__name__} moves only on the lattice")
 
-    def displacement(
-        self, actions: np.ndarray, keys: np.ndarray, steps: np.ndarray, rngs: list[np.random.Generator]
-    ) -> np.ndarray:
-        """True displacements ``(n, 2)`` in cm of the commanded 10 cm moves ``actions`` ``(n,)``."""
+    def displacement(self, actions: np.ndarray, keys: np.ndarray, steps: np.ndarray) -> np.ndarray:
+        """True displacements ``(n, 2)`` in cm of the commanded 10 cm moves ``actions`` ``(n,)`` at counters
+        ``keys``/``steps``."""
         raise NotImplementedError(f"{type(self).__name__} moves only on the lattice")
 
     def check_start(self, xy: np.ndarray, cell: int) -> None:
@@ -335,10 +336,20 @@ class Robot:
 class IdealRobot(Robot):
     """The simulator's robot (``NomadOffice-v0``): exact readings plus optional per-step ``noise``; exact
     10 cm moves unless ``step_sd_cm`` / ``slip_sd_cm`` perturb each move's length and lateral position,
-    which takes the robot off the lattice (readings ray cast at the true pose)."""
+    which takes the robot off the lattice (readings ray cast at the true pose).
+
+    Its move noise draws from each env's own generator: ``generators()`` gives them, one per robot of a
+    :meth:`displacement` call (a single env's ``np_random``; a batched env's, seeded as single ones), and
+    a robot with move noise needs it.
+    """
 
     def __init__(
-        self, core: OfficeCore, noise: NoiseModel | None = None, step_sd_cm: float = 0.0, slip_sd_cm: float = 0.0
+        self,
+        core: OfficeCore,
+        noise: NoiseModel | None = None,
+        step_sd_cm: float = 0.0,
+        slip_sd_cm: float = 0.0,
+        generators: Callable[[], Sequence[np.random.Generator]] | None = None,
     ) -> None:
         super().__init__(core)
         self.noise = noise
@@ -346,6 +357,9 @@ class IdealRobot(Robot):
         self.slip_sd_cm = slip_sd_cm
         self.on_lattice = step_sd_cm == 0.0 and slip_sd_cm == 0.0
         self.varying_readings = noise is not None
+        if not self.on_lattice and generators is None:
+            raise ValueError("an IdealRobot with step_sd_cm or slip_sd_cm needs its envs' generators (generators)")
+        self.generators = generators
 
     @cached_property
     def _sd_table(self) -> np.ndarray:
@@ -368,10 +382,11 @@ class IdealRobot(Robot):
             ranges = self.noise.apply(ranges, keys, steps)
         return sensors.normalise(ranges)
 
-    def displacement(
-        self, actions: np.ndarray, keys: np.ndarray, steps: np.ndarray, rngs: list[np.random.Generator]
-    ) -> np.ndarray:
-        """The command plus ``step_sd_cm`` along and ``slip_sd_cm`` across, drawn from each env's generator."""
+    def displacement(self, actions: np.ndarray, keys: np.ndarray, steps: np.ndarray) -> np.ndarray:
+        """The command plus ``step_sd_cm`` along and ``slip_sd_cm`` across, drawn from each env's generator (the
+        counters are unused: the draws follow each generator's order, as a single env's ``np_random``)."""
+        assert self.generators is not None
+        rngs = self.generators()
         command = MOVES_CM[actions]
         along = [rng.normal(0.0, self.step_sd_cm) if self.step_sd_cm else 0.0 for rng in rngs]
         lateral = [rng.normal(0.0, self.slip_sd_cm) if self.slip_sd_cm else 0.0 for rng in rngs]

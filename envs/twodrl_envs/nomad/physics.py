@@ -40,8 +40,9 @@ import numpy as np
 
 from twodrl_envs.nomad import sensors
 from twodrl_envs.nomad.core import OfficeCore, Robot, counter_word, office_core
+from twodrl_envs.nomad.episode import non_negative
 from twodrl_envs.nomad.geometry import MOVES_CM, REGION_KEYS, ROBOT_RADIUS_CM, STEP_CM, OfficeMap
-from twodrl_envs.nomad.office import NomadOfficeEnv, non_negative
+from twodrl_envs.nomad.office import NomadOfficeEnv
 from twodrl_envs.nomad.realistic import RealisticModel
 from twodrl_envs.nomad.sensors import BEARINGS, N_SONAR, SONAR_HALF_ANGLE, SONAR_MAX_CM
 
@@ -244,9 +245,7 @@ class MuJoCoRobot(Robot):
         end = self.data.qpos if touched is None else touched
         return (end - start) * 100.0
 
-    def displacement(
-        self, actions: np.ndarray, keys: np.ndarray, steps: np.ndarray, rngs: list[np.random.Generator]
-    ) -> np.ndarray:
+    def displacement(self, actions: np.ndarray, keys: np.ndarray, steps: np.ndarray) -> np.ndarray:
         """The physics' true displacement ``(1, 2)`` cm of one commanded move from :meth:`place`'s position."""
         if len(actions) != 1:
             raise ValueError(f"MuJoCoRobot moves one robot, got {len(actions)} actions")

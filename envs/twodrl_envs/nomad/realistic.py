@@ -389,9 +389,7 @@ class RealisticRobot(Robot):
     def pose_readings(self, positions: np.ndarray, keys: np.ndarray, steps: np.ndarray) -> np.ndarray:
         return self.scene.readings(positions, keys, steps)
 
-    def displacement(
-        self, actions: np.ndarray, keys: np.ndarray, steps: np.ndarray, rngs: list[np.random.Generator]
-    ) -> np.ndarray:
+    def displacement(self, actions: np.ndarray, keys: np.ndarray, steps: np.ndarray) -> np.ndarray:
         return self.model.displacement(actions, keys, steps)
 
 

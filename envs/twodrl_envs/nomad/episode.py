@@ -1,0 +1,312 @@
+"""An office episode written once, for one robot or N: the options' checks, the start, a move, the route memory,
+the observation, ``info`` and the frame.
+
+:class:`Episodes` applies :mod:`twodrl_envs.nomad.core`'s rules to the robots of an env in arrays ``(n, ...)``;
+:class:`~twodrl_envs.nomad.batched.BatchedNomadOffice` holds N robots' state and calls it, and
+:class:`~twodrl_envs.nomad.office.NomadOfficeEnv` holds one robot's. On the lattice the single env takes a Python
+fast path (:meth:`Episodes.start_one`, :meth:`Episodes.observe_one`, :attr:`LatticeOutcomes.rows
+<twodrl_envs.nomad.core.LatticeOutcomes.rows>`), measured faster than arrays of one row and tested equal to them.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+from gymnasium import spaces
+
+from twodrl_envs.nomad import sensors
+from twodrl_envs.nomad.core import (
+    OfficeCore,
+    Robot,
+    check_starts,
+    continuous_move,
+    evaluations,
+    route_code_at,
+    start_draw,
+    start_draws,
+)
+from twodrl_envs.nomad.geometry import MOVES_CM, ROBOT_RADIUS_CM, clearance
+from twodrl_envs.nomad.sensors import NoiseModel
+
+OBSERVATIONS = ("sensors", "cell")
+INFO_KEYS = ("punishment", "collision", "route", "position_cm", "is_success")
+"""Keys of every step's ``info`` (``route`` only on a map with route regions)."""
+RENDER_MODES = ("rgb_array",)
+
+
+def sensor_noise_model(value: object) -> NoiseModel | None:
+    """The :class:`NoiseModel` of a ``sensor_noise`` option (``True``: the default model; ``None``/``False``: none)."""
+    if value is None or value is False:
+        return None
+    if value is True:
+        return NoiseModel()
+    if isinstance(value, NoiseModel):
+        return value
+    raise TypeError(f"sensor_noise must be a bool, None or a NoiseModel, got {type(value).__name__}: {value!r}")
+
+
+def check_observation(observation: object, lattice: bool, env_name: str) -> str:
+    """``observation`` if it is one of :data:`OBSERVATIONS` that ``env_name`` can give, else ``ValueError``.
+
+    ``"cell"`` needs motion on the lattice (``lattice``): elsewhere the robot's pose is no cell.
+    """
+    if not isinstance(observation, str) or observation not in OBSERVATIONS:
+        raise ValueError(f"observation must be one of {OBSERVATIONS}, got {observation!r}")
+    if observation == "cell" and not lattice:
+        raise ValueError(
+            f"observation='cell' needs a robot that moves on the lattice, but {env_name} moves it off the lattice "
+            "(use observation='sensors', or the ideal model without step_sd_cm / slip_sd_cm)"
+        )
+    return observation
+
+
+def non_negative(name: str, value: object) -> float:
+    """``value`` as a float if it is a finite number >= 0, else ``ValueError`` naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, int | float) or not np.isfinite(value) or value < 0:
+        raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+    return float(value)
+
+
+def check_progress(progress: object, robot: Robot) -> float:
+    """``progress`` (the weight of the progress signal, :class:`~twodrl_envs.nomad.core.LatticeOutcomes`) as a
+    float if it is a finite number >= 0 and, when > 0, ``robot`` moves on the lattice; else ``ValueError``."""
+    weight = non_negative("progress", progress)
+    if weight > 0.0 and not robot.on_lattice:
+        raise ValueError(
+            f"progress={progress!r} needs a robot that moves on the lattice ({type(robot).__name__} does not)"
+        )
+    return weight
+
+
+def observation_space(core: OfficeCore, observation: str, observe_odometry: bool) -> spaces.Space:
+    """One robot's observation space: ``Discrete(n_cells)`` for ``"cell"``, else 32 readings (+ 2 odometry)."""
+    if observation == "cell":
+        return spaces.Discrete(len(core.lattice.cells))
+    return spaces.Box(0.0, 1.0, shape=(sensors.N_READINGS + (2 if observe_odometry else 0),), dtype=np.float32)
+
+
+def base_key(rng: np.random.Generator) -> int:
+    """An env's noise base key, drawn from its seeded generator (the episode keys derive from it)."""
+    return int(rng.integers(0, 2**63, size=1, dtype=np.uint64)[0])
+
+
+class Start(NamedTuple):
+    """Where episodes start: lattice cells ``(n,)`` (-1 off the lattice), centres ``(n, 2)`` cm, route codes."""
+
+    cells: np.ndarray
+    positions: np.ndarray
+    routes: np.ndarray
+
+
+class Move(NamedTuple):
+    """The outcome of moves ``(n,)``: cells, centres ``(n, 2)`` and odometry ``(n, 2)`` after them (where a move
+    collides, those before it), ``collided``, ``goal``, route ``code`` and the evaluations (eq. 11-12)."""
+
+    cells: np.ndarray
+    positions: np.ndarray
+    odometry: np.ndarray
+    collided: np.ndarray
+    goal: np.ndarray
+    code: np.ndarray
+    reward: np.ndarray
+    punishment: np.ndarray
+
+
+class Episodes:
+    """The episodes of ``robot`` in ``core``'s office with an env's checked options (the single and batched envs').
+
+    ``observe_odometry``, ``render_mode``, ``observation``, ``starts`` and ``progress`` are the envs' options of
+    those names (their defaults the envs'), checked here in that order; ``env_name`` names the env in errors.
+    Odometry off the lattice is dead reckoning: the start plus the commanded moves that did not collide.
+    """
+
+    def __init__(
+        self,
+        core: OfficeCore,
+        robot: Robot,
+        observe_odometry: bool = True,
+        render_mode: str | None = None,
+        observation: str = "sensors",
+        starts: str = "map",
+        progress: float = 0.0,
+        env_name: str = "the env",
+    ) -> None:
+        if not isinstance(observe_odometry, bool):
+            raise TypeError(f"observe_odometry must be a bool, got {observe_odometry!r}")
+        if render_mode is not None and render_mode not in RENDER_MODES:
+            raise ValueError(f"render_mode must be None or one of {list(RENDER_MODES)}, got {render_mode!r}")
+        self.core, self.robot = core, robot
+        self.observe_odometry, self.render_mode = observe_odometry, render_mode
+        self.observation = check_observation(observation, robot.on_lattice, env_name)
+        self.starts = check_starts(starts)
+        self.progress = check_progress(progress, robot)
+        self.outcomes = robot.outcomes(self.progress) if robot.on_lattice else None
+        self.start_cells = robot.start_cells if starts == "uniform" else np.zeros(0, dtype=np.intp)
+        self._start_cells = self.start_cells.tolist()
+        self.observation_space = observation_space(core, observation, observe_odometry)
+        self.has_routes = core.office.has_routes
+        self.info_keys = tuple(key for key in INFO_KEYS if key != "route" or self.has_routes)
+        # set here, not by cached_property: an attribute added later slows every attribute look-up (the fast path's)
+        self._map_start: tuple[np.ndarray, int, int] | None = None
+        self._renderer: Any = None
+
+    # --- the start ----------------------------------------------------------------------------
+    def start_state(self, position: object) -> tuple[np.ndarray, int, int]:
+        """Checked position ``(2,)``, lattice cell (-1 off the lattice) and route code of a start at ``position``."""
+        pos = self._check_position(position)
+        cell = self.core.lattice.index(pos) if self.robot.on_lattice else -1
+        self.robot.check_start(pos, cell)
+        if cell < 0 and self.observation == "cell":
+            raise ValueError(f"options['position'] {tuple(pos)} is not a lattice cell, which observation='cell' needs")
+        return pos, cell, int(route_code_at(self.core.office, pos))
+
+    def _check_position(self, position: object) -> np.ndarray:
+        try:
+            xy = np.asarray(position, dtype=np.float64)
+        except (TypeError, ValueError) as err:
+            raise ValueError(f"options['position'] must be (x_cm, y_cm), got {position!r}") from err
+        if xy.shape != (2,) or not np.all(np.isfinite(xy)):
+            raise ValueError(f"options['position'] must be two finite numbers (x_cm, y_cm), got {position!r}")
+        if not self.core.office.inside_bounds(xy):
+            raise ValueError(f"options['position'] {tuple(xy)} is outside the map bounds {self.core.office.bounds}")
+        gap = float(clearance(xy[None], self.core.office.walls)[0])
+        if gap <= ROBOT_RADIUS_CM:
+            raise ValueError(
+                f"options['position'] {tuple(xy)} puts the robot in a wall (centre {gap:.1f} cm from a wall, "
+                f"radius {ROBOT_RADIUS_CM:.0f} cm)"
+            )
+        return xy
+
+    def map_start(self) -> tuple[np.ndarray, int, int]:
+        """:meth:`start_state` of the map's start, checked on first use."""
+        if self._map_start is None:
+            self._map_start = self.start_state(self.core.office.start)
+        return self._map_start
+
+    def start(self, keys: np.ndarray) -> Start:
+        """The starts of episodes of noise keys ``keys`` ``(n,)``, as ``starts`` says: the map's start, or a cell of
+        :attr:`start_cells` drawn from the key (exploring starts)."""
+        n = len(keys)
+        if self.starts == "uniform":
+            drawn = self.start_cells[start_draws(keys, len(self.start_cells))]
+            cells = drawn if self.robot.on_lattice else np.full(n, -1)
+            return Start(cells, self.core.lattice.cells[drawn], self.core.route_code[drawn])
+        position, cell, route = self.map_start()
+        return Start(np.full(n, cell), np.repeat(position[None], n, axis=0), np.full(n, route, dtype=np.int8))
+
+    def start_one(self, key: int) -> tuple[np.ndarray, int, int]:
+        """:meth:`start` of one episode in Python values: position ``(2,)`` (a fresh array), cell and route code."""
+        if self._start_cells:
+            drawn = self._start_cells[start_draw(key, len(self._start_cells))]
+            cell = drawn if self.robot.on_lattice else -1
+            return self.core.lattice.cells[drawn].copy(), cell, int(self.core.route_code[drawn])
+        position, cell, route = self.map_start()
+        return position.copy(), cell, route
+
+    # --- a move -------------------------------------------------------------------------------
+    def move(
+        self,
+        cells: np.ndarray,
+        positions: np.ndarray,
+        odometry: np.ndarray,
+        actions: np.ndarray,
+        keys: np.ndarray,
+        steps: np.ndarray,
+    ) -> Move:
+        """The moves ``actions`` ``(n,)`` of robots at ``cells``/``positions`` with ``odometry``, at counters
+        ``keys``/``steps`` (the step being taken): by the lattice outcomes on the lattice, else by the robot's
+        displacement and :func:`~twodrl_envs.nomad.core.continuous_move`. On the lattice the odometry is the
+        position."""
+        if self.outcomes is None:
+            return self.move_off_lattice(positions, odometry, actions, keys, steps)
+        out = self.outcomes
+        after = out.next_cell[cells, actions]
+        moved = self.core.lattice.cells[after]
+        taken = (cells, actions)
+        return Move(
+            after,
+            moved,
+            moved,
+            out.collided[taken],
+            out.goal[taken],
+            out.code[taken],
+            out.reward[taken],
+            out.punishment[taken],
+        )
+
+    def move_off_lattice(
+        self, positions: np.ndarray, odometry: np.ndarray, actions: np.ndarray, keys: np.ndarray, steps: np.ndarray
+    ) -> Move:
+        """:meth:`move` of robots off the lattice's cells (cells -1): the robot's displacement, the swept-disc test,
+        dead-reckoned odometry."""
+        shift = self.robot.displacement(actions, keys, steps)
+        target, collided, code, goal = continuous_move(self.core.office, positions, shift)
+        reward, punishment = evaluations(collided, goal)
+        stay = collided[:, None]
+        moved = np.where(stay, positions, target)
+        odometry = np.where(stay, odometry, odometry + MOVES_CM[actions])
+        return Move(np.full(len(actions), -1), moved, odometry, collided, goal, code, reward, punishment)
+
+    # --- what the robot observes and the env reports --------------------------------------------
+    def observe(
+        self,
+        rows: np.ndarray,
+        cells: np.ndarray,
+        positions: np.ndarray,
+        odometry: np.ndarray,
+        keys: np.ndarray,
+        steps: np.ndarray,
+    ) -> np.ndarray:
+        """Observations (a fresh array) of the robots ``rows`` (a bool mask) at ``cells`` (on the lattice) or
+        ``positions`` (off it) with ``odometry`` ``(n, 2)`` cm, at counters ``keys``/``steps`` (all ``(n, ...)``)."""
+        if self.observation == "cell":
+            return cells[rows]  # fancy indexing: a copy
+        if not self.robot.on_lattice:
+            return self.observe_poses(positions[rows], odometry[rows], keys[rows], steps[rows])
+        at = cells[rows]
+        return self._observation(self.robot.cell_readings(at, keys[rows], steps[rows]), self.core.cell_odometry[at])
+
+    def observe_poses(
+        self, positions: np.ndarray, odometry: np.ndarray, keys: np.ndarray, steps: np.ndarray
+    ) -> np.ndarray:
+        """Sensor observations ``(n, ...)`` of robots off the lattice's cells (readings at the true ``positions``)."""
+        return self._observation(self.robot.pose_readings(positions, keys, steps), self.core.odometry(odometry))
+
+    def _observation(self, readings: np.ndarray, odometry: np.ndarray) -> np.ndarray:
+        """Fresh readings ``(n, 32)``, followed by the normalised ``odometry`` ``(n, 2)`` unless not observed."""
+        if not self.observe_odometry:
+            return readings  # fancy indexing or computed: a fresh array
+        return np.concatenate([readings, odometry], axis=1)
+
+    def observe_one(self, cell: int, key: int, step: int) -> np.ndarray | int:
+        """:meth:`observe` of one robot on the lattice, in Python values (a single env's step is mostly call
+        overhead)."""
+        if self.observation == "cell":
+            return cell
+        readings = self.robot.cell_reading(cell, key, step)
+        if not self.observe_odometry:
+            return readings.copy()
+        return np.concatenate([readings, self.core.cell_odometry[cell]])
+
+    def info(self, punishment: Any, collided: Any, route: Any, position: Any, goal: Any) -> dict[str, Any]:
+        """A step's ``info`` (:data:`INFO_KEYS`) of one robot (Python values) or N (arrays); ``route`` is the
+        label of the route code (:data:`~twodrl_envs.nomad.core.ROUTES`), left out on a map without routes."""
+        info = {
+            "punishment": punishment,
+            "collision": collided,
+            "route": route,
+            "position_cm": position,
+            "is_success": goal,
+        }
+        if not self.has_routes:
+            del info["route"]
+        return info
+
+    def frame(self, position: np.ndarray, trajectory: list[tuple[float, float]]) -> np.ndarray:
+        """Top-down RGB frame of a robot at ``position`` after ``trajectory``: walls, start, goal, sonar cones."""
+        if self._renderer is None:
+            from twodrl_envs.nomad.render import OfficeRenderer
+
+            self._renderer = OfficeRenderer(self.core.office)
+        return self._renderer.frame(position, trajectory)
