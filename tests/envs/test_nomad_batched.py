@@ -64,10 +64,12 @@ def test_single_env_fast_path_equals_the_one_definition(env_id, kwargs):
     rng = np.random.default_rng(4)
     keys = rng.integers(0, 2**63, size=64, dtype=np.uint64)
     start = episodes.start(keys)
+    cells, routes = (np.broadcast_to(values, keys.shape) for values in (start.cells, start.routes))
+    positions = np.broadcast_to(start.positions, (*keys.shape, 2))
     for i, key in enumerate(keys.tolist()):
         position, cell, route = episodes.start_one(key)
-        np.testing.assert_array_equal(position, start.positions[i])
-        assert (cell, route) == (start.cells[i], start.routes[i])
+        np.testing.assert_array_equal(position, positions[i])
+        assert (cell, route) == (cells[i], routes[i])
     if not episodes.robot.on_lattice:
         return
     cells = np.flatnonzero(episodes.robot.moves.max(axis=1) >= 0)  # recorded / free cells

@@ -92,11 +92,12 @@ def base_key(rng: np.random.Generator) -> int:
 
 
 class Start(NamedTuple):
-    """Where episodes start: lattice cells ``(n,)`` (-1 off the lattice), centres ``(n, 2)`` cm, route codes."""
+    """Where episodes start: lattice cells ``(n,)`` (-1 off the lattice), centres ``(n, 2)`` cm, route codes ``(n,)``;
+    at the map's start, one cell, centre and code that broadcast to them."""
 
-    cells: np.ndarray
+    cells: np.ndarray | int
     positions: np.ndarray
-    routes: np.ndarray
+    routes: np.ndarray | int
 
 
 class Move(NamedTuple):
@@ -187,13 +188,12 @@ class Episodes:
     def start(self, keys: np.ndarray) -> Start:
         """The starts of episodes of noise keys ``keys`` ``(n,)``, as ``starts`` says: the map's start, or a cell of
         :attr:`start_cells` drawn from the key (exploring starts)."""
-        n = len(keys)
         if self.starts == "uniform":
             drawn = self.start_cells[start_draws(keys, len(self.start_cells))]
-            cells = drawn if self.robot.on_lattice else np.full(n, -1)
+            cells = drawn if self.robot.on_lattice else np.full(len(keys), -1)
             return Start(cells, self.core.lattice.cells[drawn], self.core.route_code[drawn])
         position, cell, route = self.map_start()
-        return Start(np.full(n, cell), np.repeat(position[None], n, axis=0), np.full(n, route, dtype=np.int8))
+        return Start(cell, position, route)
 
     def start_one(self, key: int) -> tuple[np.ndarray, int, int]:
         """:meth:`start` of one episode in Python values: position ``(2,)`` (a fresh array), cell and route code."""
