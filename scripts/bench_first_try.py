@@ -31,6 +31,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -188,32 +189,55 @@ def _learned_by(record: dict, steps: float) -> bool:
     return any(c["goal_rate"] >= 0.8 for c in record["checks"] if c["timesteps"] <= steps)
 
 
-def restart_table(records: list[dict], fractions: tuple[float, ...] = (0.2, 0.3, 0.4, 0.5)) -> str:
-    """The offline analysis of a restart when no check reached the goal by ``f`` of the budget
-    (``results/reliability/preregistration.md``): per map, each seed's run as the first attempt and the other's,
-    cut to the budget left, as the restart; the learned share and the mean steps spent, against no restart."""
+def restart_table(
+    records: list[dict], longer: list[dict] = (), fractions: tuple[float, ...] = (0.2, 0.3, 0.4, 0.5)
+) -> str:
+    """The offline analysis of ``results/reliability/preregistration.md``: per map, each seed's run as the first
+    attempt and the other's as the restart, when no check reached the goal by ``f`` of the budget ``B``; the
+    restart within ``B`` or with a whole ``B`` of its own; and the ceiling ``2B`` from ``longer`` (the runs that
+    did not learn, continued to ``2B``, whose checks up to ``B`` must be the recorded ones). Learned pairs and mean
+    steps spent, against no change.
+
+    :raises ValueError: if a continued run's checks up to ``B`` differ from the recorded run's
+    """
     runs: dict[str, list[dict]] = {}
     for record in records:
         runs.setdefault(record["map"], []).append(record)
+    continued = {(r["map"], r["seed"]): r for r in longer}
+    for record in records:
+        more = continued.get((record["map"], record["seed"]))
+        if more is not None and more["checks"][: len(record["checks"])] != record["checks"]:
+            raise ValueError(f"{record['map']} seed {record['seed']}: the run to 2B is not the recorded one continued")
     pairs = [(a, b) for group in runs.values() if len(group) == 2 for a, b in (group, group[::-1])]
-    lines = ["| restart at (share of budget) | learned | mean steps |", "| --- | --- | --- |"]
-    for fraction in (None, *fractions):
-        learned, steps = 0, 0.0
-        for first, second in pairs:
-            budget = first["n_timesteps"]
-            cut = None
-            if fraction is not None:
-                late = [c["timesteps"] for c in first["checks"] if c["timesteps"] >= fraction * budget]
-                early = [c for c in first["checks"] if c["timesteps"] <= (late[0] if late else budget)]
-                cut = late[0] if late and max(c["goal_rate"] for c in early) == 0.0 else None
-            if cut is None:
-                learned += _learned_by(first, budget)
-                steps += first["num_timesteps"]
-            else:
-                learned += _learned_by(second, budget - cut)
-                steps += cut + min(second["num_timesteps"], budget - cut)
-        name = "no restart" if fraction is None else f"{fraction:.1f}"
-        lines.append(f"| {name} | {learned}/{len(pairs)} | {steps / max(len(pairs), 1):,.0f} |")
+
+    def outcome(first: dict, second: dict, fraction: float | None, own_budget: bool) -> tuple[bool, int]:
+        budget = first["n_timesteps"]
+        late = [c["timesteps"] for c in first["checks"] if fraction is not None and c["timesteps"] >= fraction * budget]
+        if not late or max(c["goal_rate"] for c in first["checks"] if c["timesteps"] <= late[0]) > 0.0:
+            return _learned_by(first, budget), first["num_timesteps"]
+        left = budget if own_budget else budget - late[0]
+        return _learned_by(second, left), late[0] + min(second["num_timesteps"], left)
+
+    def ceiling(first: dict) -> tuple[bool, int]:
+        budget = first["n_timesteps"]
+        if _learned_by(first, budget):
+            return True, first["num_timesteps"]
+        more = continued.get((first["map"], first["seed"]))
+        if more is None:
+            raise ValueError(f"{first['map']} seed {first['seed']} did not learn and has no run to 2B")
+        return _learned_by(more, 2 * budget), more["num_timesteps"]
+
+    candidates: list[tuple[str, Any]] = [("no change (ceiling B)", lambda a, b: outcome(a, b, None, False))]
+    for f in fractions:
+        candidates.append((f"restart at {f:.1f} B within B", lambda a, b, f=f: outcome(a, b, f, False)))
+        candidates.append((f"restart at {f:.1f} B, a whole B after it", lambda a, b, f=f: outcome(a, b, f, True)))
+    if longer:
+        candidates.append(("ceiling 2B", lambda a, b: ceiling(a)))
+    lines = ["| candidate | learned pairs | mean steps |", "| --- | --- | --- |"]
+    for name, result in candidates:
+        outcomes = [result(a, b) for a, b in pairs]
+        steps = sum(s for _, s in outcomes) / max(len(pairs), 1)
+        lines.append(f"| {name} | {sum(ok for ok, _ in outcomes)}/{len(pairs)} | {steps:,.0f} |")
     return "\n".join(lines) + "\n"
 
 
@@ -261,10 +285,12 @@ def main() -> None:
     parser.add_argument("--table", type=Path, nargs="+", help="print the table of rows CSVs and exit")
     parser.add_argument("--plot", type=Path, help="with --table: also draw wall seconds against shortest path here")
     parser.add_argument("--restarts", type=Path, nargs="+", help="print the restart analysis of --checks files")
+    parser.add_argument("--longer", type=Path, nargs="*", default=[], help="with --restarts: the runs to 2B")
     args = parser.parse_args()
     if args.restarts is not None:
         records = [json.loads(line) for path in args.restarts for line in path.read_text().splitlines()]
-        print(restart_table(records), end="")
+        longer = [json.loads(line) for path in args.longer for line in path.read_text().splitlines()]
+        print(restart_table(records, longer), end="")
         return
     if args.table is not None:
         rows = []
