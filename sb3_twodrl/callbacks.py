@@ -27,9 +27,6 @@ from typing import Any
 
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
-from stable_baselines3.common.utils import set_random_seed
-
-from sb3_twodrl.common.validation import check_positive_int
 
 __all__ = [
     "EpisodeRecord",
@@ -288,18 +285,11 @@ class GoalCheckCallback(EvalCallback):
       so ``model.save`` saves that policy; :attr:`kept` says which check it was.
     - **Stops when learned:** once ``patience`` consecutive checks reach ``success_threshold`` (None: never
       stops early); the budget is then a ceiling. :attr:`learned_at` is the timestep of the last of them.
-    - **Restarts a run that makes no progress** (``restart_at``, None: never): if no check up to timestep
-      ``restart_at`` has reached the goal, the policy is built anew, once, at the next rollout's start: fresh
-      initial weights and optimizer from the seed ``seed + 1`` (the RNGs go on where they are if the model has no
-      seed), as a new run with another seed would start (seed variance: Henderson et al. 2018; resets: Nikishin et
-      al. 2022). The env, the timestep count and the checks go on; :attr:`restarted_at` is when it happened.
 
     An ``eval_env`` whose episodes never report ``is_success`` gets a warning and the plain ``EvalCallback``
     behaviour (nothing kept, no early stop). Other arguments are ``EvalCallback``'s.
 
-    :raises ValueError: if ``success_threshold`` is not in (0, 1], ``patience`` is not a positive int or
-        ``restart_at`` is below 1
-    :raises TypeError: if ``restart_at`` is neither None nor an int
+    :raises ValueError: if ``success_threshold`` is not in (0, 1] or ``patience`` is not a positive int
     """
 
     def __init__(
@@ -307,18 +297,12 @@ class GoalCheckCallback(EvalCallback):
         eval_env: Any,
         success_threshold: float | None = 0.8,
         patience: int = 2,
-        restart_at: int | None = None,
         eval_freq: int = 10_000,
         n_eval_episodes: int = 5,
         deterministic: bool = True,
         **kwargs: Any,
     ) -> None:
-        if restart_at is not None:
-            check_positive_int("restart_at", restart_at)
         self.record = GoalRecord(success_threshold, patience)
-        self.restart_at = restart_at
-        self.restarted_at: int | None = None
-        self._restart_due = False
         super().__init__(
             eval_env, eval_freq=eval_freq, n_eval_episodes=n_eval_episodes, deterministic=deterministic, **kwargs
         )
@@ -352,9 +336,6 @@ class GoalCheckCallback(EvalCallback):
                 copy.deepcopy(self.model.policy.state_dict()),
                 None if statistics is None else copy.deepcopy((statistics.obs_rms, statistics.ret_rms)),
             )
-        stalled = self.restart_at is not None and self.num_timesteps >= self.restart_at
-        if stalled and self.restarted_at is None and max(c.goal_rate for c in self.checks) == 0.0:
-            self._restart_due = True
         if self.record.learned:
             self.learned_at = self.num_timesteps
             if self.verbose >= 1:
@@ -362,22 +343,6 @@ class GoalCheckCallback(EvalCallback):
                 print(f"Learned: goal rate >= {threshold} in {patience} checks in a row, stopping")
             return False
         return continue_training
-
-    def _on_rollout_start(self) -> None:
-        if not self._restart_due:
-            return
-        self._restart_due, self.restarted_at = False, self.num_timesteps
-        model = self.model
-        if model.seed is not None:
-            model.seed = (model.seed + 1) % 2**32
-            set_random_seed(model.seed, using_cuda=model.device.type == "cuda")
-        policy = model.policy
-        model.policy = type(policy)(**policy._get_constructor_parameters()).to(model.device)
-        model.policy.set_training_mode(False)  # as the rollout that starts set the old one
-        if model.use_sde:
-            model.policy.reset_noise(model.n_envs)
-        if self.verbose >= 1:
-            print(f"No check reached the goal by {self.restart_at} steps: restarting with seed {model.seed}")
 
     def _on_training_end(self) -> None:
         if self._kept_state is None:

@@ -55,16 +55,10 @@ class Snapshots(BaseCallback):
         return True
 
 
-def _train(
-    schedule: list[float], budget: int, patience: int = 2, restart_at: int | None = None, **kwargs: Any
-) -> tuple[Any, Any, Snapshots]:
+def _train(schedule: list[float], budget: int, patience: int = 2, **kwargs: Any) -> tuple[Any, Any, Snapshots]:
     model = A2C("MlpPolicy", ScheduledGoal(), n_steps=STEPS_PER_CHECK, learning_rate=0.1, seed=0, device="cpu")
     checks = GoalCheckCallback(
-        ScheduledGoal(schedule, **kwargs),
-        eval_freq=STEPS_PER_CHECK,
-        n_eval_episodes=EVAL_EPISODES,
-        patience=patience,
-        restart_at=restart_at,
+        ScheduledGoal(schedule, **kwargs), eval_freq=STEPS_PER_CHECK, n_eval_episodes=EVAL_EPISODES, patience=patience
     )
     snapshots = Snapshots()
     model.learn(budget, callback=[checks, snapshots])
@@ -106,34 +100,6 @@ def test_works_with_the_two_dimensional_algorithms() -> None:
     checks = GoalCheckCallback(ScheduledGoal([0.0, 1.0, 1.0]), eval_freq=STEPS_PER_CHECK, n_eval_episodes=2)
     model.learn(50 * STEPS_PER_CHECK, callback=checks)
     assert checks.learned_at == 3 * STEPS_PER_CHECK == model.num_timesteps
-
-
-@pytest.mark.parametrize("algo", [A2C, TwoDimA2C])
-def test_a_run_whose_checks_never_reach_the_goal_restarts_once_as_seed_plus_one(algo: Any) -> None:
-    model = algo("MlpPolicy", ScheduledGoal(), n_steps=STEPS_PER_CHECK, learning_rate=0.0, seed=7, device="cpu")
-    checks = GoalCheckCallback(
-        ScheduledGoal([0.0]), eval_freq=STEPS_PER_CHECK, n_eval_episodes=EVAL_EPISODES, restart_at=2 * STEPS_PER_CHECK
-    )
-    model.learn(6 * STEPS_PER_CHECK, callback=checks)
-    assert checks.restarted_at == 2 * STEPS_PER_CHECK and model.seed == 8  # once: later stalled checks change nothing
-    fresh = algo("MlpPolicy", ScheduledGoal(), n_steps=STEPS_PER_CHECK, seed=8, device="cpu")
-    first = algo("MlpPolicy", ScheduledGoal(), n_steps=STEPS_PER_CHECK, seed=7, device="cpu")
-    kept = model.policy.state_dict()  # no learning: the kept (last, ties) check's policy is the restart's start
-    assert _same(kept, fresh.policy.state_dict()) and not _same(kept, first.policy.state_dict())
-
-
-def test_a_run_that_reached_the_goal_once_does_not_restart() -> None:
-    _, checks, _ = _train([0.0, 1.0, 0.0, 0.0], budget=4 * STEPS_PER_CHECK, restart_at=2 * STEPS_PER_CHECK)
-    assert checks.restarted_at is None
-
-
-@pytest.mark.parametrize(
-    ("kwargs", "error"),
-    [({"restart_at": 0}, ValueError), ({"restart_at": 1.5}, TypeError), ({"restart_at": True}, TypeError)],
-)
-def test_bad_restart_at_names_itself(kwargs: dict[str, Any], error: type[Exception]) -> None:
-    with pytest.raises(error, match="restart_at"):
-        GoalCheckCallback(ScheduledGoal(), **kwargs)
 
 
 @pytest.mark.parametrize(
