@@ -12,8 +12,9 @@ facts (a class method ``task_facts(**options)``, e.g. :func:`twodrl_envs.nomad.t
   ``e**-1`` of its value at the start (the punishment discount stays the paper's short one);
 * the **budget** ``n_timesteps = min(max(1e6, 40,000 L), 2e7)`` (rounded up to 1e5), twice that where a cell's
   readings vary from visit to visit (on ``docs/own_office.md``'s example the database env learned in 3 of 4 seeds
-  at 1M steps, in 2 of 2 at 2M). With goal checks (:class:`sb3_twodrl.callbacks.GoalCheckCallback`) the budget
-  is a ceiling: training stops once the policy has learned;
+  at 1M steps, in 2 of 2 at 2M). With goal checks that stop training once the policy has learned
+  (``sb3-twodrl-train``: :mod:`twodrl_zoo.manager`) the ceiling is :data:`twodrl_zoo.manager.CEILING` times the
+  budget;
 * on offices longer than :data:`LONG_MOVES` moves (size L and beyond), where the value of the goal differs little
   between neighbouring cells far from it (``gamma**d (1 - gamma)``): the **entropy bonus** drops from the
   packaged 0.05 to :data:`LONG_ENT_COEF` (the bonus otherwise outweighs those differences and keeps the far policy
@@ -79,7 +80,7 @@ def derive(facts: dict[str, Any]) -> Derived:
     note = (
         f"settings derived from the map ({size_class(moves)}: shortest path {moves} moves, farthest start "
         f"{facts['farthest_start']}): gamma {hyperparams['gamma']}, time limit "
-        f"{env_kwargs.get('max_episode_steps', '-')} steps, {hyperparams['n_timesteps']:,} steps at most, training "
+        f"{env_kwargs.get('max_episode_steps', '-')} steps, budget {hyperparams['n_timesteps']:,} steps, training "
         "episodes from random reachable cells (exploring starts)"
     )
     if "ent_coef" in hyperparams:

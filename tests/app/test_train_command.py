@@ -76,3 +76,25 @@ def test_export_help_is_plain_text(capsys: pytest.CaptureFixture[str]) -> None:
         main(["--help"])
     out = capsys.readouterr().out
     assert "--input-stage" in out and not any(markup in out for markup in ("``", ":func:", ":class:", "::"))
+
+
+@pytest.mark.parametrize(
+    ("options", "factor"),
+    [({}, 2), ({"eval_freq": -1}, 1), ({"n_timesteps": 5000}, 1), ({"hyperparams": {"n_timesteps": 5000}}, None)],
+)
+def test_the_derived_budget_is_a_ceiling_twice_as_long_only_where_checks_stop_training(
+    tmp_path: Path, options: dict, factor: int | None
+) -> None:
+    import argparse
+
+    from twodrl_zoo.manager import CEILING, ExperimentManager
+    from twodrl_zoo.zoo import register_zoo
+
+    register_zoo()
+    derived = derived_settings("NomadOffice-v0", {"map": "generated:S:3"})
+    assert derived is not None and CEILING == 2
+    manager = ExperimentManager(
+        argparse.Namespace(), "twoda2c", "NomadOffice-v0", str(tmp_path), env_kwargs={"map": "generated:S:3"}, **options
+    )
+    budget = manager.custom_hyperparams["n_timesteps"]
+    assert budget == (5000 if factor is None else factor * derived.hyperparams["n_timesteps"])
