@@ -29,9 +29,9 @@ from twodrl_bench.folders import append_row
 from twodrl_bench.intervals import wilson
 from twodrl_envs.nomad.core import office_core
 from twodrl_zoo import hyperparams
+from twodrl_zoo.evaluation import goal_rate, run_episodes
 from twodrl_zoo.recipe import size_class
 from twodrl_zoo.vec_env import make_test_env, make_train_env
-from twodrl_zoo.zoo import goal_rate, run_episodes
 
 ENV = "NomadOffice-v0"
 TEST_EPISODES = 20
@@ -40,7 +40,7 @@ FIELDS = ("map", "size", "moves", "algo", "seed", "learned", "train_s", "train_c
 
 class LearnedStop(BaseCallback):
     """Every ``every`` steps, the goal rate of one deterministic episode from the map's start per test env
-    (:func:`twodrl_zoo.zoo.run_episodes`); stops at a goal rate >= 0.8, timing training apart from evaluation."""
+    (:func:`twodrl_zoo.evaluation.run_episodes`); stops at a goal rate >= 0.8, timing training apart from evaluation."""
 
     def __init__(self, test_env: VecEnv, every: int) -> None:
         super().__init__()

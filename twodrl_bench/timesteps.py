@@ -71,9 +71,9 @@ from twodrl_bench.settings import check_entry, derived, timesteps_entry
 from twodrl_bench.settings import settings_file as settings_file_of
 from twodrl_bench.stand_ins import stand_in_columns, stand_in_trials
 from twodrl_bench.trials import transfer_columns
+from twodrl_zoo.evaluation import goal_rate, run_episodes
 from twodrl_zoo.hyperparams import resolve
 from twodrl_zoo.manager import PATIENCE, SUCCESS_THRESHOLD
-from twodrl_zoo.zoo import goal_rate, run_episodes
 
 Row = dict[str, Any]
 EVAL_SEED = 10**6
@@ -140,9 +140,9 @@ def learning_curve(episodes: np.ndarray, n_timesteps: int, bins: int = CURVE_BIN
 
 def evaluate(model: Any, env: Any, episodes: int, events: str | None) -> dict[str, float]:
     """Mean return, length and punishment events of ``episodes`` deterministic episodes in a row on the one-env
-    ``env`` (:func:`twodrl_zoo.zoo.run_episodes`), the share with an event, the share that reached the goal
-    (:func:`twodrl_zoo.zoo.goal_rate`, NaN where the env does not say) and the reward per step over all their steps
-    (paper section 3.4.1)."""
+    ``env`` (:func:`twodrl_zoo.evaluation.run_episodes`), the share with an event, the share that reached the
+    goal (:func:`twodrl_zoo.evaluation.goal_rate`, NaN where the env does not say) and the reward per step over all
+    their steps (paper section 3.4.1)."""
     ran = run_episodes(model, env, per_env=episodes)
     r = np.array([episode.episode_return for episode in ran])
     n = np.array([episode.length for episode in ran])

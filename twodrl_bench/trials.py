@@ -14,16 +14,16 @@ from stable_baselines3.common.vec_env import VecEnv
 from sb3_twodrl.callbacks import summarize_episodes
 from twodrl_bench.protocol import PAPER_TRIALS, ROUTES, TRANSFER_SEED
 from twodrl_bench.settings import test_env_kwargs
-from twodrl_zoo.zoo import Episode, run_episodes
+from twodrl_zoo.evaluation import Episode, run_episodes
 
 OWN_TRIALS = 10
 """Trials of a transferred policy in its own training env (did it learn at all?)."""
 
 
 def seeded_trials(model: BaseAlgorithm, test_env: VecEnv, seed: int, deterministic: bool = True) -> list[Episode]:
-    """One trial per sub-env of ``test_env`` (:func:`twodrl_zoo.zoo.run_episodes`), in sub-env order: sub-env ``i``
-    reset with seed ``seed + i``, the policy sampling with torch seeded by ``seed`` in a forked generator (the
-    caller's torch state untouched)."""
+    """One trial per sub-env of ``test_env`` (:func:`twodrl_zoo.evaluation.run_episodes`), in sub-env order:
+    sub-env ``i`` reset with seed ``seed + i``, the policy sampling with torch seeded by ``seed`` in a forked
+    generator (the caller's torch state untouched)."""
     with th.random.fork_rng(devices=[]):
         th.manual_seed(seed)
         test_env.seed(seed)

@@ -108,7 +108,7 @@ def check_command_line(prog: str, argv: list[str]) -> dict[str, dict[str, Any]]:
 
 def report_goal_rate(argv: list[str], given: dict[str, dict[str, Any]], episodes: int = 20) -> float | None:
     """Run ``episodes`` deterministic test episodes of the model ``train`` just saved
-    (:func:`twodrl_zoo.zoo.run_episodes`); print the goal rate.
+    (:func:`twodrl_zoo.evaluation.run_episodes`); print the goal rate.
 
     The test env is the run's evaluation env (``goal_checks.json``: the command's options with the task's test
     options, e.g. a map's start). The line says which policy it is: the goal check it was kept at (steps, goal rate)
@@ -121,8 +121,9 @@ def report_goal_rate(argv: list[str], given: dict[str, dict[str, Any]], episodes
 
     from rl_zoo3.utils import ALGOS, create_test_env, get_latest_run_id, get_saved_hyperparams
 
+    from twodrl_zoo.evaluation import goal_rate, run_episodes
     from twodrl_zoo.manager import CHECKS_FILE
-    from twodrl_zoo.zoo import _option_value, goal_rate, run_episodes
+    from twodrl_zoo.zoo import _option_value
 
     algo, env_id = _option_value(argv, "--algo") or "ppo", _option_value(argv, "--env") or "CartPole-v1"
     folder = _option_value(argv, "-f", "--log-folder") or "logs"

@@ -1,5 +1,4 @@
-"""rl-zoo3 integration: register TwoDimA2C as ``twoda2c`` and TwoDimPPO as ``twodppo``, with Optuna samplers; the one
-test-episode runner (:func:`run_episodes`) of the commands, both bench protocols and the scripts.
+"""rl-zoo3 integration: register TwoDimA2C as ``twoda2c`` and TwoDimPPO as ``twodppo``, with Optuna samplers.
 
 >>> from twodrl_zoo.zoo import register_zoo
 >>> register_zoo()  # then rl_zoo3.train.train() / rl_zoo3.enjoy.enjoy() accept --algo twoda2c / twodppo
@@ -10,37 +9,27 @@ stored Optuna trial back into constructor arguments, for ``--trial-id``). Those 
 dicts that the training and enjoy scripts import by reference, so registering means adding keys to
 them, before rl-zoo3 parses its command line (its ``--algo`` choices are taken from ``ALGOS``).
 
-:func:`run_episodes` and :func:`goal_rate` need no extra; the rest requires the ``zoo`` extra. The installed commands
-``sb3-twodrl-train`` and ``sb3-twodrl-enjoy`` (:mod:`twodrl_zoo.cli`) call :func:`register_zoo`.
+Requires the ``zoo`` extra. The installed commands ``sb3-twodrl-train`` and ``sb3-twodrl-enjoy``
+(:mod:`twodrl_zoo.cli`) call :func:`register_zoo`.
 """
 
 from __future__ import annotations
 
-import math
 import sys
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable
 from importlib.metadata import entry_points
 from typing import Any
 
-import numpy as np
-from stable_baselines3.common.base_class import BaseAlgorithm
-from stable_baselines3.common.vec_env import VecEnv
-
 from sb3_twodrl import ALGOS
-from sb3_twodrl.callbacks import EpisodeRecord, EpisodeTracker
 from twodrl_zoo.hyperparams import PACKAGED, hyperparams_path
 
 __all__ = [
     "GYM_PACKAGES_GROUP",
     "ZOO_ALGOS",
-    "Episode",
     "convert_two_dim_params",
-    "goal_rate",
     "import_gym_packages",
     "prepare_zoo_argv",
     "register_zoo",
-    "run_episodes",
     "run_zoo_entry",
     "sample_two_dim_params",
     "sample_twoda2c_params",
@@ -205,43 +194,3 @@ def _dict_options(argv: list[str]) -> tuple[list[str], dict[str, dict[str, Any]]
         parser.add_argument(option, type=str, nargs="+", action=StoreDict, default={})
     known, rest = parser.parse_known_args(argv)
     return rest, {option: getattr(known, option[2:].replace("-", "_")) for option in _DICT_OPTIONS}
-
-
-@dataclass(frozen=True)
-class Episode:
-    """One finished test episode of :func:`run_episodes`."""
-
-    episode_return: float
-    """The rewards the VecEnv returned, summed (normalised where a ``VecNormalize`` normalises them)."""
-    length: int
-    info: dict[str, Any]
-    """The info of its last step (``is_success``, the event counts so far, ...)."""
-    record: EpisodeRecord
-    """:class:`~sb3_twodrl.callbacks.EpisodeTracker`'s record: the route it took, a collision at any step."""
-
-
-def run_episodes(model: BaseAlgorithm, env: VecEnv, per_env: int = 1, deterministic: bool = True) -> list[Episode]:
-    """The first ``per_env`` episodes of each sub-env of ``env`` from a reset, sub-env by sub-env; deterministic by
-    default. Every step is one ``predict`` for the whole batch; a sub-env that has finished its episodes keeps
-    stepping (the batch moves together) but counts no more. Seeding ``env`` (``env.seed``) and torch is the
-    caller's."""
-    n = env.num_envs
-    tracker = EpisodeTracker(n)
-    returns, lengths = np.zeros(n), np.zeros(n, dtype=np.int64)
-    ended: list[list[Episode]] = [[] for _ in range(n)]
-    obs = env.reset()
-    while any(len(episodes) < per_env for episodes in ended):
-        actions, _ = model.predict(obs, deterministic=deterministic)  # type: ignore[arg-type]
-        obs, rewards, dones, infos = env.step(actions)
-        returns, lengths = returns + rewards, lengths + 1
-        finished = np.flatnonzero(dones).tolist()
-        for i, record in zip(finished, tracker.step(infos, dones, rewards), strict=True):
-            if len(ended[i]) < per_env:
-                ended[i].append(Episode(float(returns[i]), int(lengths[i]), infos[i], record))
-            returns[i], lengths[i] = 0.0, 0
-    return [episode for episodes in ended for episode in episodes]
-
-
-def goal_rate(episodes: Sequence[Episode]) -> float:
-    """The share of ``episodes`` whose last ``info["is_success"]`` is true; NaN if one of them lacks the key."""
-    return float(np.mean([float(episode.info.get("is_success", math.nan)) for episode in episodes]))

@@ -1,4 +1,4 @@
-"""twodrl_zoo.zoo.run_episodes: the one test-episode runner, its order, returns, last infos and goal rate."""
+"""twodrl_zoo.evaluation.run_episodes: the one test-episode runner, its order, returns, last infos and goal rate."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from gymnasium.wrappers import TimeLimit
 from stable_baselines3.common.vec_env import DummyVecEnv
 
 from tests.toy_envs import LatticeCorridor, TwoStateChain
-from twodrl_zoo.zoo import goal_rate, run_episodes
+from twodrl_zoo.evaluation import goal_rate, run_episodes
 
 
 class Scripted:
