@@ -1,7 +1,8 @@
-"""The timesteps job: one (arm, seed) trained by rl-zoo3's ``ExperimentManager``, then a final deterministic evaluation.
+"""The timesteps job: one (arm, seed) trained by the train command's ``ExperimentManager``, then a final deterministic
+evaluation.
 
 :func:`run` is the job of an experiment whose protocol is :class:`~twodrl_bench.protocol.TimestepsProtocol`. The
-arm's model and envs are made as ``rl_zoo3.train`` makes them, from its resolved entry; the training envs'
+arm's model and envs are made as ``sb3-twodrl-train`` makes them, from its resolved entry; the training envs'
 ``Monitor`` records every training episode's return and punishment events, from which come the learning curve and
 the training event rates; the final model then runs ``eval_episodes`` deterministic episodes on a fresh env seeded
 ``EVAL_SEED + seed``, apart from training (with the run's ``VecNormalize`` statistics, frozen, where the entry
@@ -58,7 +59,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.monitor import Monitor, ResultsWriter
@@ -73,7 +73,7 @@ from twodrl_bench.stand_ins import stand_in_columns, stand_in_trials
 from twodrl_bench.trials import transfer_columns
 from twodrl_zoo.evaluation import goal_rate, run_episodes
 from twodrl_zoo.hyperparams import resolve
-from twodrl_zoo.manager import PATIENCE, SUCCESS_THRESHOLD
+from twodrl_zoo.manager import PATIENCE, SUCCESS_THRESHOLD, ExperimentManager
 
 Row = dict[str, Any]
 EVAL_SEED = 10**6
@@ -282,17 +282,16 @@ def restore_monitors(model: BaseAlgorithm, files: list[tuple[str, int]]) -> None
 
 
 def _new_model(job: Job, entry: dict[str, Any], log: Path) -> tuple[BaseAlgorithm, Path]:
-    """``job``'s model and env as rl-zoo3's ``train`` makes them (seed, ``ExperimentManager``), its run folder."""
-    from rl_zoo3.exp_manager import ExperimentManager
+    """``job``'s model and env as ``sb3-twodrl-train`` makes them (seed, :class:`twodrl_zoo.manager.ExperimentManager`)
+    from the resolved ``entry``, without goal checks and with rl-zoo3's envs (a ``Monitor`` per env, whose files
+    :func:`training_episodes` reads); its run folder."""
     from stable_baselines3.common.utils import set_random_seed
 
     algo, env, seed = job.arm.algo, job.experiment.env, job.seed
     shutil.rmtree(log, ignore_errors=True)  # what an interrupted attempt without a checkpoint left
     log.mkdir(parents=True)
-    conf = log / f"{algo}.yml"
-    conf.write_text(yaml.safe_dump({env: entry}))
     timesteps = job.protocol.timesteps or -1
-    options = {"algo": algo, "env": env, "seed": seed, "n_timesteps": timesteps, "conf_file": str(conf)}
+    options = {"algo": algo, "env": env, "seed": seed, "n_timesteps": timesteps}
     set_random_seed(seed)
     manager = ExperimentManager(
         argparse.Namespace(**options, log_folder=str(log), vec_env="dummy", device="cpu", eval_freq=-1),
@@ -305,16 +304,17 @@ def _new_model(job: Job, entry: dict[str, Any], log: Path) -> tuple[BaseAlgorith
         log_interval=-1,
         vec_env_type="dummy",
         device="cpu",
-        config=str(conf),
+        entry=entry,
+        batched=False,
     )
     model, _ = manager.setup_experiment()
     return model, Path(manager.save_path)
 
 
 def run(job: Job) -> list[Row]:
-    """Train ``job``'s arm with rl-zoo3's ``ExperimentManager`` (its logs in ``<out_dir>/zoo/<arm>_seed<seed>``),
-    checkpointed (:class:`Checkpoints`) and resumed (:func:`twodrl_bench.jobs.resume`) as every job is, then
-    evaluate the final model; its one row.
+    """Train ``job``'s arm with the train command's ``ExperimentManager`` (its logs in
+    ``<out_dir>/zoo/<arm>_seed<seed>``), checkpointed (:class:`Checkpoints`) and resumed
+    (:func:`twodrl_bench.jobs.resume`) as every job is, then evaluate the final model; its one row.
 
     The row: ``task``, ``env``, ``arm``, ``seed``, ``n_timesteps``; the final evaluation's ``final_return`` (mean),
     ``final_return_std``, ``final_length``, ``final_events`` (per episode), ``final_event_share``; over the

@@ -1,5 +1,5 @@
 """rl-zoo3's ``ExperimentManager`` with this project's settings, goal checks and batched envs: the model factory of
-``sb3-twodrl-train`` (the bench's timesteps protocol builds its models with rl-zoo3's own, which its rows need).
+``sb3-twodrl-train`` and of the bench's timesteps protocol (:mod:`twodrl_bench.timesteps`).
 
 What it changes of rl-zoo3's (everything else, every option, the run folder, is rl-zoo3's):
 
@@ -18,15 +18,22 @@ What it changes of rl-zoo3's (everything else, every option, the run folder, is 
   that batch (:class:`~twodrl_zoo.vec_env.VectorEnvAdapter`, under one ``VecMonitor``): the same episodes as
   ``DummyVecEnv`` of single envs, several times faster.
 
+Two options of its own, which the bench sets: ``entry``, a run's entry resolved already
+(:func:`twodrl_zoo.hyperparams.resolve`), read in place of the hyperparameter file's with nothing derived over it
+(so no ceiling); ``batched=False``, rl-zoo3's envs (a ``Monitor`` per env, ``DummyVecEnv``) even where there is a
+batch.
+
 Requires the ``zoo`` extra.
 """
 
 from __future__ import annotations
 
+import copy
 import inspect
 import json
 import os
 import time
+from collections import OrderedDict
 from typing import Any
 
 from rl_zoo3.callbacks import SaveVecNormalizeCallback
@@ -53,14 +60,15 @@ CHECKS_FILE = "goal_checks.json"
 
 
 class ExperimentManager(ZooExperimentManager):
-    """rl-zoo3's ``ExperimentManager`` (same arguments) with the changes of the module docstring."""
+    """rl-zoo3's ``ExperimentManager`` (same arguments, and ``entry`` and ``batched``) with the changes of the module
+    docstring."""
 
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
+    def __init__(self, *args: Any, entry: dict[str, Any] | None = None, batched: bool = True, **kwargs: Any) -> None:
         bound = inspect.signature(ZooExperimentManager.__init__).bind(self, *args, **kwargs)
         bound.apply_defaults()
         given = bound.arguments
         given.pop("self")
-        derived = derived_settings(given["env_id"], given.get("env_kwargs"))
+        derived = None if entry is not None else derived_settings(given["env_id"], given.get("env_kwargs"))
         if derived is not None:
             resolved = resolve(
                 {}, derived, given.get("hyperparams"), given.get("env_kwargs"), given.get("eval_env_kwargs")
@@ -75,8 +83,16 @@ class ExperimentManager(ZooExperimentManager):
             given["env_kwargs"], given["eval_env_kwargs"] = resolved.env_kwargs, resolved.eval_env_kwargs
             print(f"sb3-twodrl: {note}", flush=True)
         super().__init__(**given)
+        self.entry, self.batched = entry, batched
         self.goal_checks: GoalCheckCallback | None = None
         self._clock = time.perf_counter()
+
+    def read_hyperparameters(self) -> tuple[dict[str, Any], dict[str, Any]]:
+        """rl-zoo3's, or where the constructor was given an ``entry``, that entry (``hyperparams`` over it)."""
+        if self.entry is None:
+            return super().read_hyperparameters()
+        hyperparams = {**copy.deepcopy(self.entry), **(self.custom_hyperparams or {})}
+        return hyperparams, OrderedDict(sorted(hyperparams.items()))
 
     def create_callbacks(self) -> None:
         """rl-zoo3's callbacks, its ``EvalCallback`` a :class:`~sb3_twodrl.callbacks.GoalCheckCallback`."""
@@ -99,9 +115,10 @@ class ExperimentManager(ZooExperimentManager):
             self.callbacks.append(self.goal_checks)
 
     def create_envs(self, n_envs: int, eval_env: bool = False, no_log: bool = False) -> VecEnv:
-        """The batch of the registry's vector entry point where there is one (module docstring), else rl-zoo3's."""
+        """The batch of the registry's vector entry point where there is one and ``batched`` (module docstring), else
+        rl-zoo3's."""
         plain = self.env_wrapper is None and self.vec_env_wrapper is None and self.frame_stack is None
-        if not (plain and self.vec_env_class is DummyVecEnv and has_batched_env(self.env_name.gym_id)):
+        if not (self.batched and plain and self.vec_env_class is DummyVecEnv and has_batched_env(self.env_name.gym_id)):
             return super().create_envs(n_envs, eval_env, no_log)
         options = self.eval_env_kwargs if eval_env else self.env_kwargs
         env: VecEnv = make_train_env(self.env_name.gym_id, n_envs, self.seed, "batched", options)

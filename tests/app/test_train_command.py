@@ -98,3 +98,33 @@ def test_the_derived_budget_is_a_ceiling_twice_as_long_only_where_checks_stop_tr
     )
     budget = manager.custom_hyperparams["n_timesteps"]
     assert budget == (5000 if factor is None else factor * derived.hyperparams["n_timesteps"])
+
+
+def test_the_bench_s_options_a_resolved_entry_as_it_is_and_a_monitor_per_env(tmp_path: Path) -> None:
+    """``entry``: no file read and nothing derived over it, so no ceiling though checks run; ``batched=False``:
+    rl-zoo3's envs, a ``Monitor`` file per env, where the default makes one batch under one ``VecMonitor``."""
+    import argparse
+
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    from twodrl_zoo.manager import ExperimentManager
+    from twodrl_zoo.zoo import register_zoo
+
+    register_zoo()
+    kwargs = {"map": "generated:S:3"}
+    written = read_entry(Path("twodrl_zoo/hyperparams/twoda2c.yml"), "NomadOffice-v0")
+    entry = resolve(written, derived_settings("NomadOffice-v0", kwargs), {"n_envs": 2}, kwargs).entry
+    monitors = {}
+    for batched in (False, True):
+        folder = tmp_path / str(batched)
+        manager = ExperimentManager(
+            argparse.Namespace(), "twoda2c", "NomadOffice-v0", str(folder), entry=entry, batched=batched
+        )
+        hyperparams, saved = manager.read_hyperparameters()
+        assert hyperparams == entry and list(saved) == sorted(entry) and manager.custom_hyperparams is None
+        model, _ = manager.setup_experiment()
+        assert manager.n_timesteps == entry["n_timesteps"] and manager.env_kwargs == entry["env_kwargs"]
+        assert isinstance(model.get_env(), DummyVecEnv) == (not batched)
+        monitors[batched] = sorted(p.name for p in Path(manager.save_path).glob("*monitor.csv"))
+        model.get_env().close()
+    assert monitors == {False: ["0.monitor.csv", "1.monitor.csv"], True: ["monitor.csv"]}

@@ -104,8 +104,8 @@ def test_a_timesteps_job_on_a_generated_office_trains_as_the_train_command(tmp_p
     (row,) = run_job(arm, "NomadOffice-v0", kwargs, protocol, 5, str(tmp_path), ["twodrl_envs"])
     settings = derived_settings("NomadOffice-v0", {"map": "generated:S:5"})
     assert settings is not None
-    (config,) = (tmp_path / "zoo" / "twoda2c_seed5").glob("twoda2c.yml")
-    entry = yaml.safe_load(config.read_text())["NomadOffice-v0"]
+    (config,) = (tmp_path / "zoo" / "twoda2c_seed5").glob("twoda2c/*/NomadOffice-v0/config.yml")
+    entry = dict(yaml.load(config.read_text(), Loader=yaml.UnsafeLoader))  # rl-zoo3's record of the entry it read
     assert (
         entry["gamma"] == settings.hyperparams["gamma"] and entry["n_timesteps"] == settings.hyperparams["n_timesteps"]
     )
