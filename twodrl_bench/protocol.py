@@ -11,7 +11,9 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
-ROUTES = ("shortcut", "detour")
+from twodrl_envs.nomad.geometry import ROUTE_REGIONS
+
+ROUTES = ROUTE_REGIONS
 """The office's route labels (``info["route"]``), whose shares are columns even when no test trial took one."""
 METRICS = ("goal_rate", "reward_per_step", *(f"{route}_share" for route in ROUTES), "collision_rate")
 LEARNING = ("interest_share", "mean_temperature")
