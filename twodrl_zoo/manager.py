@@ -73,13 +73,13 @@ class ExperimentManager(ZooExperimentManager):
             resolved = resolve(
                 {}, derived, given.get("hyperparams"), given.get("env_kwargs"), given.get("eval_env_kwargs")
             )
-            entry = {k: v for k, v in resolved.entry.items() if k != "env_kwargs"}
+            over_file = {k: v for k, v in resolved.entry.items() if k != "env_kwargs"}
             note = derived.note
             stops = given["eval_freq"] > 0 and not given["optimize_hyperparameters"]
             if stops and given["n_timesteps"] <= 0 and "n_timesteps" not in (given.get("hyperparams") or {}):
-                entry["n_timesteps"] = CEILING * entry["n_timesteps"]
-                note += f"; training stops once learned, at most {entry['n_timesteps']:,} steps"
-            given["hyperparams"] = entry
+                over_file["n_timesteps"] = CEILING * over_file["n_timesteps"]
+                note += f"; training stops once learned, at most {over_file['n_timesteps']:,} steps"
+            given["hyperparams"] = over_file
             given["env_kwargs"], given["eval_env_kwargs"] = resolved.env_kwargs, resolved.eval_env_kwargs
             print(f"sb3-twodrl: {note}", flush=True)
         super().__init__(**given)

@@ -11,7 +11,7 @@ pytest.importorskip("rl_zoo3")
 
 import twodrl_envs  # noqa: F401  (registers the Nomad IDs)
 from twodrl_zoo.cli import check_command_line, replay_options
-from twodrl_zoo.hyperparams import derived_settings, read_entry, resolve
+from twodrl_zoo.hyperparams import derived_settings, hyperparams_path, read_entry, resolve
 from twodrl_zoo.zoo import _dict_options
 
 
@@ -94,10 +94,18 @@ def test_the_derived_budget_is_a_ceiling_twice_as_long_only_where_checks_stop_tr
     derived = derived_settings("NomadOffice-v0", {"map": "generated:S:3"})
     assert derived is not None and CEILING == 2
     manager = ExperimentManager(
-        argparse.Namespace(), "twoda2c", "NomadOffice-v0", str(tmp_path), env_kwargs={"map": "generated:S:3"}, **options
+        argparse.Namespace(),
+        "twoda2c",
+        "NomadOffice-v0",
+        str(tmp_path),
+        env_kwargs={"map": "generated:S:3"},
+        config=str(hyperparams_path("twoda2c")),
+        **options,
     )
     budget = manager.custom_hyperparams["n_timesteps"]
     assert budget == (5000 if factor is None else factor * derived.hyperparams["n_timesteps"])
+    read, _ = manager.read_hyperparameters()  # the packaged entry under the derived settings, as train reads it
+    assert read["policy"] == "MlpPolicy" and read["gamma"] == derived.hyperparams["gamma"]
 
 
 def test_the_bench_s_options_a_resolved_entry_as_it_is_and_a_monitor_per_env(tmp_path: Path) -> None:
