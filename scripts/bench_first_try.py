@@ -38,8 +38,8 @@ import numpy as np
 import twodrl_envs  # noqa: F401  (registers NomadOffice-v0, for its task facts)
 from twodrl_bench.folders import append_row
 from twodrl_bench.intervals import wilson
-from twodrl_zoo.hyperparams import derived_settings, task_facts
-from twodrl_zoo.recipe import size_class
+from twodrl_zoo.hyperparams import task_facts
+from twodrl_zoo.recipe import derive, size_class
 
 FIELDS = (
     "map", "size", "moves", "algo", "seed", "goal_rate", "learned", "stopped_learned", "kept_at", "steps", "budget",
@@ -125,15 +125,15 @@ def run(
     """One run of the command on ``map_`` (``"office"``: the paper's office, no ``--env-kwargs``), with ``--seed
     seed`` where given and ``-n`` ``budget_factor`` times the derived budget where given; its ``goal_checks.json``
     record appended to ``checks`` (JSON lines) where given."""
+    facts = task_facts("NomadOffice-v0", {} if map_ == "office" else {"map": map_})
     command = ["sb3-twodrl-train", "--algo", algo, "--env", "NomadOffice-v0"]
     if map_ != "office":
         command += ["--env-kwargs", f'map:"{map_}"']
     if seed is not None:
         command += ["--seed", str(seed)]
     if budget_factor is not None:
-        derived = derived_settings("NomadOffice-v0", {"map": map_})
-        assert derived is not None, f"{map_} derives no budget"
-        command += ["-n", str(int(budget_factor * derived.hyperparams["n_timesteps"]))]
+        assert facts is not None, f"{map_} derives no budget"
+        command += ["-n", str(int(budget_factor * derive(facts).hyperparams["n_timesteps"]))]
     with tempfile.TemporaryDirectory() as folder:
         clock = time.perf_counter()
         done = subprocess.run(command, cwd=folder, capture_output=True, text=True)
@@ -147,7 +147,6 @@ def run(
     if checks is not None:
         with checks.open("a") as f:
             f.write(json.dumps({"map": map_, "algo": algo, "seed": seed, **record}, default=str) + "\n")
-    facts = task_facts("NomadOffice-v0", {} if map_ == "office" else {"map": map_})
     moves = 17 if facts is None else facts["shortest_path"]
     size = "paper" if facts is None else size_class(moves)
     return {**_row(map_, size, moves, algo, seed, rate, record), "wall_s": round(wall, 1), "commit": commit, "cpu": cpu}
