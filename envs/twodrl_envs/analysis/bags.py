@@ -40,7 +40,29 @@ POSE_TYPES = (ODOMETRY, "geometry_msgs/msg/PoseStamped", "geometry_msgs/msg/Pose
 POSE_FRAMES = ("start", "map")
 STORAGES = ("sqlite3", "mcap")
 ROS_HINT = 'reading or writing ROS 2 bags needs rosbags: pip install "sb3-twodrl[ros]"'
-SONAR_TOPIC, IR_TOPIC, ODOMETRY_TOPIC = "/sonar_{i}", "/ir_{i}", "/odom"
+
+# The conventions of a bag this project writes and reads (write_bag, the survey drive): import these, do not spell
+# them again. Ranges are metres (REP 103), +inf = no echo within max_range, -inf = too close (REP 117).
+SONAR_TOPIC = "/sonar_{i}"  # one sensor_msgs/msg/Range topic per sonar, i = 0..15
+IR_TOPIC = "/ir_{i}"  # one Range topic per infrared sensor
+SONAR_SCAN_TOPIC = "/sonar_scan"  # or one sensor_msgs/msg/LaserScan per ring
+IR_SCAN_TOPIC = "/ir_scan"
+ODOMETRY_TOPIC = "/odom"  # nav_msgs/msg/Odometry: the robot's own odometry (drift included)
+GROUND_TRUTH_TOPIC = "/ground_truth"  # nav_msgs/msg/Odometry: a simulator's true pose, frame MAP_FRAME
+SONAR_FRAME = "sonar_{i}"  # header.frame_id of sonar i's Range
+IR_FRAME = "ir_{i}"
+SONAR_RING_FRAME = "sonar_ring"  # header.frame_id of a ring's LaserScan (x forward, at the robot's centre)
+IR_RING_FRAME = "ir_ring"
+ODOMETRY_FRAME = "odom"  # header.frame_id of the odometry (pose_frame "start")
+MAP_FRAME = "map"  # header.frame_id of a pose in the map's frame (pose_frame "map")
+BASE_FRAME = "base_link"  # child_frame_id of the odometry
+ULTRASOUND, INFRARED = 0, 1  # sensor_msgs/msg/Range.radiation_type of a sonar / an infrared sensor
+SONAR_FIELD_OF_VIEW_RAD = float(np.deg2rad(22.5))  # Range.field_of_view: the sonar's cone; infrared: a beam, 0
+IR_FIELD_OF_VIEW_RAD = 0.0
+SCAN_ANGLE_MIN_RAD = 0.0  # a ring's LaserScan: sensor 0 at the front, counter-clockwise (REP 103)
+SCAN_INCREMENT_RAD = float(np.deg2rad(22.5))
+SONAR_RANGE_M = (float(LOW_CM[0]) / 100.0, float(HIGH_CM[0]) / 100.0)  # (min_range, max_range), metres
+IR_RANGE_M = (float(LOW_CM[N_SONAR]) / 100.0, float(HIGH_CM[N_SONAR]) / 100.0)
 
 
 def import_rosbags() -> Any:
