@@ -69,6 +69,21 @@ def _row(map_: str, size: str, moves: int, algo: str, seed: int, rate: float, re
     }
 
 
+def _with(command: str, extra: list[str]) -> str:
+    """The train ``command`` with ``extra``: ``key:value`` items join its ``--env-kwargs`` (a new one if none),
+    ``--flag value`` items go at its end."""
+    options = [a for a in extra if not a.startswith("-") and ":" in a and not a.lstrip("-").isdigit()]
+    flags = [a for a in extra if a not in options]
+    if options:
+        kwargs = " ".join(options)
+        command = (
+            command.replace("--env-kwargs ", f"--env-kwargs {kwargs} ")
+            if "--env-kwargs " in command
+            else (f"{command} --env-kwargs {kwargs}")
+        )
+    return " ".join([command, *flags])
+
+
 def doc_database_path() -> tuple[list[str], str]:
     """docs/own_office.md's database commands (record with --out, train on the database, export) and its
     robot-side loop, as written."""
@@ -80,10 +95,16 @@ def doc_database_path() -> tuple[list[str], str]:
     return commands, loop
 
 
-def run_database(map_: str, commit: str, cpu: str) -> dict[str, object]:
-    """docs/own_office.md's database path on the generated office ``map_`` (``generated:SIZE:SEED``)."""
+def run_database(
+    map_: str, commit: str, cpu: str, algo: str = "twoda2c", extra: list[str] = (), checks: Path | None = None
+) -> dict[str, object]:
+    """docs/own_office.md's database path on the generated office ``map_`` (``generated:SIZE:SEED``), its train
+    command with ``--algo algo`` and ``extra`` arguments; the run's ``goal_checks.json`` appended to ``checks``."""
     _, size, map_seed = map_.split(":")
     commands, loop = doc_database_path()
+    commands = [
+        _with(c.replace("twoda2c", algo), extra) if "-train " in c else c.replace("twoda2c", algo) for c in commands
+    ]
     with tempfile.TemporaryDirectory() as folder:
         clock = time.perf_counter()
         out = ""
@@ -102,9 +123,12 @@ def run_database(map_: str, commit: str, cpu: str) -> dict[str, object]:
     facts = task_facts("NomadOffice-v0", {"map": map_})
     assert facts is not None
     seed = int(re.search(r"^Seed: (\d+)$", out, re.MULTILINE).group(1))  # type: ignore[union-attr]
+    if checks is not None:
+        with checks.open("a") as f:
+            f.write(json.dumps({"map": map_, "algo": f"{algo}-database", "seed": seed, **record}, default=str) + "\n")
     return {
         **_row(
-            map_, size_class(facts["shortest_path"]), facts["shortest_path"], "twoda2c-database", seed, rate, record
+            map_, size_class(facts["shortest_path"]), facts["shortest_path"], f"{algo}-database", seed, rate, record
         ),
         "wall_s": round(wall, 1),
         "commit": commit,
@@ -121,6 +145,7 @@ def run(
     seed: int | None = None,
     checks: Path | None = None,
     budget_factor: float | None = None,
+    extra: list[str] = (),
 ) -> dict[str, object]:
     """One run of the command on ``map_`` (``"office"``: the paper's office, no ``--env-kwargs``), with ``--seed
     seed`` where given and ``-n`` ``budget_factor`` times the derived budget where given; its ``goal_checks.json``
@@ -134,6 +159,7 @@ def run(
     if budget_factor is not None:
         assert facts is not None, f"{map_} derives no budget"
         command += ["-n", str(int(budget_factor * derive(facts).hyperparams["n_timesteps"]))]
+    command = _with(" ".join(command), extra).split(" ")
     with tempfile.TemporaryDirectory() as folder:
         clock = time.perf_counter()
         done = subprocess.run(command, cwd=folder, capture_output=True, text=True)
@@ -279,7 +305,13 @@ def main() -> None:
     parser.add_argument("--seeds", nargs="*", type=int, default=[], help="training seeds (default: none, drawn)")
     parser.add_argument("--budget-factor", type=float, help="-n this times the derived budget (default: not given)")
     parser.add_argument("--checks", type=Path, help="JSON lines file to append each run's goal_checks.json to")
-    parser.add_argument("--database", action="store_true", help="docs/own_office.md's database path (TwoDimA2C)")
+    parser.add_argument("--database", action="store_true", help="docs/own_office.md's database path")
+    parser.add_argument(
+        "--train-args",
+        default="",
+        help="more arguments of the train command, one string: key:value env options "
+        "join its --env-kwargs, e.g. 'progress:0.05 --eval-episodes 20'",
+    )
     parser.add_argument("--out", type=Path, help="CSV to append rows to")
     parser.add_argument("--table", type=Path, nargs="+", help="print the table of rows CSVs and exit")
     parser.add_argument("--plot", type=Path, help="with --table: also draw wall seconds against shortest path here")
@@ -310,14 +342,15 @@ def main() -> None:
     cpu = cpu or platform.processor()
     fields = DATABASE_FIELDS if args.database else FIELDS
     for map_ in maps:
-        for algo in ["twoda2c-database"] if args.database else args.algos:
+        for algo in args.algos:
             for seed in args.seeds or [None]:
-                if (map_, algo, None if seed is None else str(seed)) in done:
+                label = f"{algo}-database" if args.database else algo
+                if (map_, label, None if seed is None else str(seed)) in done:
                     continue
                 if args.database:
-                    row = run_database(map_, commit, cpu)
+                    row = run_database(map_, commit, cpu, algo, args.train_args.split(), args.checks)
                 else:
-                    row = run(algo, map_, commit, cpu, seed, args.checks, args.budget_factor)
+                    row = run(algo, map_, commit, cpu, seed, args.checks, args.budget_factor, args.train_args.split())
                 print(" | ".join(str(row[f]) for f in fields), flush=True)
                 append_row(args.out, fields, row)
 
