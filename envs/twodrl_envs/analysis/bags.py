@@ -24,6 +24,7 @@ round trip). ``rosbags`` (pure Python, no ROS installation) is imported when a b
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -65,6 +66,11 @@ SONAR_RANGE_M = (float(LOW_CM[0]) / 100.0, float(HIGH_CM[0]) / 100.0)  # (min_ra
 IR_RANGE_M = (float(LOW_CM[N_SONAR]) / 100.0, float(HIGH_CM[N_SONAR]) / 100.0)
 
 
+LIMIT_TOLERANCE = 0.1  # declared min_range/max_range may differ from the sensor model's by this share of its maximum
+ANGLE_TOLERANCE_RAD = 1e-3  # a LaserScan's angle_min and angle_increment against the 22.5 degree layout
+RADIATION = {ULTRASOUND: "ULTRASOUND", INFRARED: "INFRARED"}
+
+
 def import_rosbags() -> Any:
     """The ``rosbags`` package, or ``ModuleNotFoundError`` saying which extra installs it."""
     try:
@@ -83,6 +89,59 @@ def ring_topics(pattern: str, what: str) -> list[str]:
     if "{i}" in pattern:
         return [pattern.replace("{i}", str(i)) for i in range(N_SONAR)]
     return [pattern]
+
+
+@dataclass(frozen=True)
+class Ring:
+    """What a bag must say about one ring of 16 sensors: its topics, their frame ids, type and ranges."""
+
+    what: str  # "sonar" or "ir"
+    first: int  # the ring's first column of the 32 readings
+    topics: list[str]
+    frames: list[str]  # the expected header.frame_id of each topic
+    msgtype: str  # RANGE (a topic per sensor) or SCAN (one topic)
+    radiation: int  # Range.radiation_type
+    range_m: tuple[float, float]  # the sensor model's (min, max), metres
+
+    @property
+    def flags(self) -> str:
+        """The command flag and Python argument that name this ring's topics."""
+        return f"--{self.what}-topic / {self.what}="
+
+    @property
+    def frame_flags(self) -> str:
+        return f"--{self.what}-frame / {self.what}_frame="
+
+
+def sensor_rings(
+    sonar: str = SONAR_TOPIC, ir: str = IR_TOPIC, sonar_frame: str | None = None, ir_frame: str | None = None
+) -> tuple[Ring, Ring]:
+    """The two rings of a bag's topic patterns and frame-id patterns (``None``: this project's frame ids,
+    :data:`SONAR_FRAME` for ``Range`` topics, :data:`SONAR_RING_FRAME` for a ``LaserScan``)."""
+    rings = []
+    for what, pattern, frame, first in (("sonar", sonar, sonar_frame, 0), ("ir", ir, ir_frame, N_SONAR)):
+        topics = ring_topics(pattern, what)
+        per_sensor = len(topics) > 1
+        if frame is None:
+            frame = {("sonar", True): SONAR_FRAME, ("sonar", False): SONAR_RING_FRAME}.get(
+                (what, per_sensor), IR_FRAME if per_sensor else IR_RING_FRAME
+            )
+        if not isinstance(frame, str) or not frame:
+            raise ValueError(f"{what}_frame must be a frame id (a pattern with {{i}} for Range topics), got {frame!r}")
+        frames = [frame.replace("{i}", str(i)) for i in range(len(topics))]
+        sonar_ring = what == "sonar"
+        rings.append(
+            Ring(
+                what,
+                first,
+                topics,
+                frames,
+                RANGE if per_sensor else SCAN,
+                ULTRASOUND if sonar_ring else INFRARED,
+                SONAR_RANGE_M if sonar_ring else IR_RANGE_M,
+            )
+        )
+    return rings[0], rings[1]
 
 
 def _check_frame(pose_frame: object) -> str:
@@ -113,6 +172,85 @@ def _saturate(values_m: np.ndarray, low: float, high: float) -> np.ndarray:
     return np.clip(cm, low, high)
 
 
+CENTIMETRES = "ranges in centimetres? ROS ranges are metres (REP 103): record the bag in metres"
+
+
+def _check_limits(where: str, ring: Ring, low: float, high: float) -> None:
+    """The declared ``min_range``/``max_range`` (metres) against the sensor model's, within :data:`LIMIT_TOLERANCE`."""
+    model_low, model_high = ring.range_m
+    tolerance = LIMIT_TOLERANCE * model_high
+    if abs(low - model_low) <= tolerance and abs(high - model_high) <= tolerance:  # NaN or inf fail too
+        return
+    declared = f"{where} declares min_range {low:g}, max_range {high:g}"
+    if high > 10 * model_high:
+        raise ValueError(f"{declared}: {CENTIMETRES} (a {ring.what} reads {model_low:g}-{model_high:g} m)")
+    raise ValueError(
+        f"{declared}; a {ring.what} of the sensor model reads {model_low:g}-{model_high:g} m (within {tolerance:g} m): "
+        f"is it the {ring.what} ring? ({ring.flags})"
+    )
+
+
+def scan_columns(where: str, angle_min: float, increment: float, count: int) -> np.ndarray:
+    """Which of the ring's 16 sensors (0 at the front, counter-clockwise) each of a ``LaserScan``'s ranges is:
+    any ``angle_min`` on the 22.5 degree layout, counter-clockwise (positive ``angle_increment``) or clockwise."""
+    step = SCAN_INCREMENT_RAD
+    if count != N_SONAR:
+        raise ValueError(f"{where} has {count} ranges, expected {N_SONAR} (one per sensor)")
+    if not abs(abs(increment) - step) <= ANGLE_TOLERANCE_RAD:
+        raise ValueError(
+            f"{where} has angle_increment {increment:g} rad, expected +-{step:.6f} (22.5 degrees, one per sensor)"
+        )
+    first = angle_min / step
+    if not abs(first - round(first)) * step <= ANGLE_TOLERANCE_RAD:
+        raise ValueError(
+            f"{where} has angle_min {angle_min:g} rad, not a multiple of 22.5 degrees: its ranges are not the sensors'"
+        )
+    return (round(first) + int(np.sign(increment)) * np.arange(N_SONAR)) % N_SONAR
+
+
+def message_ranges(where: str, ring: Ring, index: int, msgtype: str, msg: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The columns (of the 32) and ranges (cm, saturated) of one ring message, once what it says about itself is
+    checked: frame id, radiation type, declared ranges, scan layout, each range (NaN, negative, beyond max_range)."""
+    frame = msg.header.frame_id
+    if frame != ring.frames[index]:
+        raise ValueError(
+            f"{where} has frame_id {frame!r}, expected {ring.frames[index]!r} (the sensor layout; a robot whose frames "
+            f"are named otherwise: {ring.frame_flags}PATTERN, with {{i}} for Range topics)"
+        )
+    if msgtype == RANGE:
+        if msg.radiation_type != ring.radiation:
+            name = RADIATION.get(msg.radiation_type, "unknown")
+            raise ValueError(
+                f"{where} has radiation_type {msg.radiation_type} ({name}), expected {ring.radiation} "
+                f"({RADIATION[ring.radiation]}) for the {ring.what} ring ({ring.flags})"
+            )
+        low, high = float(msg.min_range), float(msg.max_range)
+        values = np.array([msg.range], dtype=np.float64)
+        columns = np.array([index])
+    else:
+        low, high = float(msg.range_min), float(msg.range_max)
+        values = np.asarray(msg.ranges, dtype=np.float64)
+        columns = scan_columns(where, float(msg.angle_min), float(msg.angle_increment), len(values))
+    _check_limits(where, ring, low, high)
+    if np.isnan(values).any():
+        raise ValueError(f"{where} has a NaN range")
+    finite = values[np.isfinite(values)]
+    if (finite < 0).any():
+        raise ValueError(f"{where} reads {finite.min():g} m, a negative range (too close is -inf, REP 117)")
+    if (finite > high * (1 + 1e-6)).any():
+        worst = f"{where} reads {finite.max():g} m, beyond its max_range {high:g} m"
+        if finite.max() > 10 * ring.range_m[1]:
+            raise ValueError(f"{worst}: {CENTIMETRES}")
+        raise ValueError(f"{worst} (no echo within max_range is +inf, REP 117)")
+    return ring.first + columns, _saturate(values, LOW_CM[ring.first], HIGH_CM[ring.first])
+
+
+def _position(msg: Any) -> np.ndarray:
+    """x, y (m) of an ``Odometry``, ``PoseWithCovarianceStamped`` or ``PoseStamped``."""
+    pose = msg.pose.pose if hasattr(msg.pose, "pose") else msg.pose
+    return np.array([pose.position.x, pose.position.y])
+
+
 def read_bag(
     path: str | Path,
     *,
@@ -122,20 +260,23 @@ def read_bag(
     odometry: str = ODOMETRY_TOPIC,
     pose: str | None = None,
     pose_frame: str = "start",
+    sonar_frame: str | None = None,
+    ir_frame: str | None = None,
 ) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
     """Positions ``(n, 2)`` cm in ``map``'s frame, readings ``(n, 32)`` cm and statistics of a bag's readings.
 
     ``sonar`` / ``ir``: a topic pattern with ``{i}`` (16 ``Range`` topics) or one ``LaserScan`` topic;
-    ``odometry``: the ``Odometry`` topic, which is the pose source unless ``pose`` names another topic
-    (module docstring).
+    ``sonar_frame`` / ``ir_frame``: their frame ids (:func:`sensor_rings`); ``odometry``: the ``Odometry`` topic,
+    the pose source unless ``pose`` names another topic (then ``odometry`` is not read). Each message is checked
+    (:func:`message_ranges`).
     """
     frame = _check_frame(pose_frame)
-    ring_topics(sonar, "sonar"), ring_topics(ir, "ir")  # checked before the bag is opened
-    if not isinstance(odometry, str) or not odometry.startswith("/"):
-        raise ValueError(f"odometry topic must be a topic name starting with '/', got {odometry!r}")
+    rings = sensor_rings(sonar, ir, sonar_frame, ir_frame)  # checked before the bag is opened
+    for what, topic in (("odometry", odometry), ("pose", pose)):
+        if (topic is not None or what == "odometry") and (not isinstance(topic, str) or not topic.startswith("/")):
+            raise ValueError(f"{what} topic must be a topic name starting with '/', got {topic!r}")
     pose_topic = odometry if pose is None else pose
-    if not isinstance(pose_topic, str) or not pose_topic.startswith("/"):
-        raise ValueError(f"pose topic must be a topic name starting with '/', got {pose!r}")
+    pose_flags = "--odom-topic / odometry=" if pose is None else "--pose-topic / pose="
     rosbags = import_rosbags()
     path = Path(path)
     name = str(path)
@@ -151,27 +292,25 @@ def read_bag(
     try:
         types = {c.topic: c.msgtype for c in reader.connections}
         topics = ", ".join(sorted(types)) or "none"
-        if odometry not in types:
-            raise ValueError(f"bag {name}: no odometry: no topic {odometry!r} (its topics: {topics})")
-        for topic, expected in [
-            (t, (RANGE,) if "{i}" in p else (SCAN,)) for p in (sonar, ir) for t in ring_topics(p, "")
-        ]:
-            if topic not in types:
-                raise ValueError(f"bag {name}: no topic {topic!r} (its topics: {topics})")
-            if types[topic] not in expected:
-                raise ValueError(f"bag {name}: topic {topic!r} is {types[topic]}, expected {expected[0]}")
-        if types[odometry] != ODOMETRY:
-            raise ValueError(f"bag {name}: topic {odometry!r} is {types[odometry]}, expected {ODOMETRY}")
         if pose_topic not in types:
-            raise ValueError(f"bag {name}: no pose topic {pose_topic!r} (its topics: {topics})")
-        if types[pose_topic] not in POSE_TYPES:
+            what = "no odometry" if pose is None else "no pose"
+            raise ValueError(f"bag {name}: {what}: no topic {pose_topic!r} (its topics: {topics}; {pose_flags})")
+        expected_pose = (ODOMETRY,) if pose is None else POSE_TYPES
+        if types[pose_topic] not in expected_pose:
             raise ValueError(
-                f"bag {name}: topic {pose_topic!r} is {types[pose_topic]}, expected one of {', '.join(POSE_TYPES)}"
+                f"bag {name}: topic {pose_topic!r} is {types[pose_topic]}, expected {' or '.join(expected_pose)} "
+                f"({pose_flags})"
             )
-        slots = {}  # topic -> first slot of the 32
-        for ring, pattern in ((0, sonar), (N_SONAR, ir)):
-            for j, topic in enumerate(ring_topics(pattern, "")):
-                slots[topic] = ring + j
+        slots: dict[str, tuple[Ring, int]] = {}
+        for ring in rings:
+            for j, topic in enumerate(ring.topics):
+                if topic not in types:
+                    raise ValueError(f"bag {name}: no topic {topic!r} (its topics: {topics}; {ring.flags})")
+                if types[topic] != ring.msgtype:
+                    raise ValueError(
+                        f"bag {name}: topic {topic!r} is {types[topic]}, expected {ring.msgtype} ({ring.flags})"
+                    )
+                slots[topic] = (ring, j)
         wanted = [c for c in reader.connections if c.topic in slots or c.topic == pose_topic]
         current = np.full(N_SONAR + N_IR, np.nan)
         fresh = np.zeros(N_SONAR + N_IR, dtype=bool)
@@ -181,20 +320,14 @@ def read_bag(
             msg = reader.deserialize(raw, connection.msgtype)
             topic = connection.topic
             if topic == pose_topic:
-                inner = msg.pose.pose if hasattr(msg.pose, "pose") else msg.pose
-                last_pose = np.array([inner.position.x, inner.position.y])
+                last_pose = _position(msg)
                 poses += 1
                 if topic not in slots:
                     continue
-            first = slots[topic]
-            values = np.atleast_1d(np.asarray(msg.ranges if connection.msgtype == SCAN else msg.range, dtype=float))
-            if connection.msgtype == SCAN and len(values) != N_SONAR:
-                raise ValueError(f"bag {name}: LaserScan topic {topic!r} has {len(values)} ranges, expected {N_SONAR}")
-            if np.isnan(values).any():
-                raise ValueError(f"bag {name}: topic {topic!r} has a NaN range")
-            span = slice(first, first + len(values))
-            current[span] = _saturate(values, LOW_CM[first], HIGH_CM[first])
-            fresh[span] = True
+            ring, j = slots[topic]
+            columns, values = message_ranges(f"bag {name}: topic {topic!r}", ring, j, connection.msgtype, msg)
+            current[columns] = values
+            fresh[columns] = True
             if fresh.all():
                 fresh[:] = False
                 if last_pose is None:
@@ -205,7 +338,9 @@ def read_bag(
     finally:
         reader.close()
     if poses == 0:
-        raise ValueError(f"bag {name}: no odometry: topic {pose_topic!r} has no messages")
+        raise ValueError(
+            f"bag {name}: {'no odometry' if pose is None else 'no pose'}: topic {pose_topic!r} has no messages"
+        )
     if not readings:
         raise ValueError(
             f"bag {name}: no complete reading (every one of the 32 sensors after a pose on {pose_topic!r})"
@@ -223,6 +358,8 @@ def import_bag(
     odometry: str = ODOMETRY_TOPIC,
     pose: str | None = None,
     pose_frame: str = "start",
+    sonar_frame: str | None = None,
+    ir_frame: str | None = None,
     per_cell: int | None = None,
     require_all_cells: bool = True,
     tolerance_cm: float = 5.0,
@@ -231,12 +368,20 @@ def import_bag(
     files them (:func:`~twodrl_envs.memorable.database.import_readings`: ``per_cell``, ``require_all_cells``,
     ``tolerance_cm``)."""
     positions, readings, stats = read_bag(
-        path, map=map, sonar=sonar, ir=ir, odometry=odometry, pose=pose, pose_frame=pose_frame
+        path,
+        map=map,
+        sonar=sonar,
+        ir=ir,
+        odometry=odometry,
+        pose=pose,
+        pose_frame=pose_frame,
+        sonar_frame=sonar_frame,
+        ir_frame=ir_frame,
     )
     recording = {
         "source": "ros2 bag",
         "file": Path(path).name,
-        "topics": {"sonar": sonar, "ir": ir, "odometry": odometry, "pose": pose or odometry},
+        "topics": {"sonar": sonar, "ir": ir, "pose": pose or odometry},
         "pose_frame": pose_frame,
         **stats,
         "how": "imported from a ROS 2 bag: a reading once all 32 sensors have published, at the latest pose, "
@@ -254,6 +399,70 @@ def import_bag(
     )
 
 
+def header(typestore: Any, ns: int, frame_id: str) -> Any:
+    """A ``std_msgs/msg/Header`` at ``ns`` nanoseconds."""
+    types = typestore.types
+    stamp = types["builtin_interfaces/msg/Time"](sec=ns // 10**9, nanosec=ns % 10**9)
+    return types["std_msgs/msg/Header"](stamp=stamp, frame_id=frame_id)
+
+
+def range_message(typestore: Any, ns: int, value_cm: float, column: int) -> Any:
+    """Sensor ``column``'s (of the 32) ``Range`` as this project writes it: metres, its frame id, radiation type
+    and ranges; at the sensor's maximum, ``+inf`` (REP 117)."""
+    infrared = column >= N_SONAR
+    low, high = IR_RANGE_M if infrared else SONAR_RANGE_M
+    i = column % N_SONAR
+    return typestore.types[RANGE](
+        header=header(typestore, ns, (IR_FRAME if infrared else SONAR_FRAME).replace("{i}", str(i))),
+        radiation_type=INFRARED if infrared else ULTRASOUND,
+        field_of_view=IR_FIELD_OF_VIEW_RAD if infrared else SONAR_FIELD_OF_VIEW_RAD,
+        min_range=low,
+        max_range=high,
+        range=np.inf if value_cm >= HIGH_CM[column] else float(value_cm / 100.0),
+    )
+
+
+def scan_message(typestore: Any, ns: int, values_cm: np.ndarray, first: int) -> Any:
+    """A ring's 16 ranges (cm, sensor 0 first; ``first`` 0: sonar, 16: infrared) as this project's ``LaserScan``:
+    counter-clockwise from the front, metres, the ring's frame id; at the sensors' maximum, ``+inf``."""
+    infrared = first >= N_SONAR
+    low, high = IR_RANGE_M if infrared else SONAR_RANGE_M
+    values_cm = np.asarray(values_cm, dtype=np.float64)
+    return typestore.types[SCAN](
+        header=header(typestore, ns, IR_RING_FRAME if infrared else SONAR_RING_FRAME),
+        angle_min=SCAN_ANGLE_MIN_RAD,
+        angle_max=SCAN_ANGLE_MIN_RAD + SCAN_INCREMENT_RAD * (N_SONAR - 1),
+        angle_increment=SCAN_INCREMENT_RAD,
+        time_increment=0.0,
+        scan_time=0.0,
+        range_min=low,
+        range_max=high,
+        ranges=np.where(values_cm >= HIGH_CM[first], np.inf, values_cm / 100.0).astype(np.float32),
+        intensities=np.zeros(0, dtype=np.float32),
+    )
+
+
+def odometry_message(typestore: Any, ns: int, xy_m: np.ndarray, frame_id: str = ODOMETRY_FRAME) -> Any:
+    """An ``Odometry`` at ``xy_m`` (metres, in ``frame_id``), heading along x, at rest."""
+    types = typestore.types
+    point, quaternion, vector = (types[f"geometry_msgs/msg/{t}"] for t in ("Point", "Quaternion", "Vector3"))
+    still = vector(x=0.0, y=0.0, z=0.0)
+    return types[ODOMETRY](
+        header=header(typestore, ns, frame_id),
+        child_frame_id=BASE_FRAME,
+        pose=types["geometry_msgs/msg/PoseWithCovariance"](
+            pose=types["geometry_msgs/msg/Pose"](
+                position=point(x=float(xy_m[0]), y=float(xy_m[1]), z=0.0),
+                orientation=quaternion(x=0.0, y=0.0, z=0.0, w=1.0),
+            ),
+            covariance=np.zeros(36),
+        ),
+        twist=types["geometry_msgs/msg/TwistWithCovariance"](
+            twist=types["geometry_msgs/msg/Twist"](linear=still, angular=still), covariance=np.zeros(36)
+        ),
+    )
+
+
 def write_bag(
     path: str | Path,
     positions_cm: np.ndarray,
@@ -266,11 +475,14 @@ def write_bag(
     pose_frame: str = "start",
     period_s: float = 0.5,
     storage: str = "sqlite3",
+    ground_truth_cm: np.ndarray | None = None,
 ) -> Path:
     """Write a drive (positions ``(n, 2)`` cm in ``map``'s frame, readings ``(n, 32)`` cm) as a ROS 2 bag (``storage``
-    ``"sqlite3"`` or ``"mcap"``),
-    as a Nomad-like robot logs it: per reading, its odometry, then each sensor's ``Range`` (or each ring's
-    ``LaserScan``), ``period_s`` apart; ranges at the sensors' maxima are ``+inf`` (REP 117)."""
+    ``"sqlite3"`` or ``"mcap"``) as a Nomad-like robot logs it: per reading, its odometry (frame
+    :data:`ODOMETRY_FRAME`, or :data:`MAP_FRAME` for ``pose_frame="map"``), then each sensor's ``Range``
+    (:func:`range_message`) or each ring's ``LaserScan`` (:func:`scan_message`), ``period_s`` apart.
+    ``ground_truth_cm`` ``(n, 2)``: the true positions, as ``Odometry`` on :data:`GROUND_TRUTH_TOPIC` in the map's
+    frame."""
     frame = _check_frame(pose_frame)
     if storage not in STORAGES:
         raise ValueError(f"storage must be one of {STORAGES}, got {storage!r}")
@@ -282,80 +494,47 @@ def write_bag(
         raise ValueError(
             f"positions_cm must be (n, 2) and ranges_cm (n, 32), got {positions_cm.shape} and {ranges_cm.shape}"
         )
+    if ground_truth_cm is not None:
+        ground_truth_cm = np.asarray(ground_truth_cm, dtype=np.float64)
+        if ground_truth_cm.shape != positions_cm.shape:
+            raise ValueError(
+                f"ground_truth_cm must be {positions_cm.shape} as positions_cm, got {ground_truth_cm.shape}"
+            )
+    rings = sensor_rings(sonar, ir)
     rosbags = import_rosbags()
     typestore = rosbags.typesys.get_typestore(rosbags.typesys.Stores.ROS2_HUMBLE)
-    types = typestore.types
     start = office_core(map).office.start
     odometry_xy = _from_map(positions_cm, frame, start)
-
-    def header(ns: int, frame_id: str) -> Any:
-        stamp = types["builtin_interfaces/msg/Time"](sec=ns // 10**9, nanosec=ns % 10**9)
-        return types["std_msgs/msg/Header"](stamp=stamp, frame_id=frame_id)
-
-    def range_msg(ns: int, value_cm: float, slot: int) -> Any:
-        infrared = slot >= N_SONAR
-        high = HIGH_CM[slot]
-        return types[RANGE](
-            header=header(ns, f"{'ir' if infrared else 'sonar'}_{slot % N_SONAR}"),
-            radiation_type=1 if infrared else 0,
-            field_of_view=0.0 if infrared else float(np.deg2rad(22.5)),
-            min_range=float(LOW_CM[slot] / 100.0),
-            max_range=float(high / 100.0),
-            range=np.inf if value_cm >= high else float(value_cm / 100.0),
-        )
-
-    def scan_msg(ns: int, values_cm: np.ndarray, first: int) -> Any:
-        high = HIGH_CM[first]
-        return types[SCAN](
-            header=header(ns, "sonar_ring" if first == 0 else "ir_ring"),
-            angle_min=0.0,
-            angle_max=float(np.deg2rad(22.5 * (N_SONAR - 1))),
-            angle_increment=float(np.deg2rad(22.5)),
-            time_increment=0.0,
-            scan_time=0.0,
-            range_min=float(LOW_CM[first] / 100.0),
-            range_max=float(high / 100.0),
-            ranges=np.where(values_cm >= high, np.inf, values_cm / 100.0).astype(np.float32),
-            intensities=np.zeros(0, dtype=np.float32),
-        )
-
-    point, quaternion, vector = (types[f"geometry_msgs/msg/{t}"] for t in ("Point", "Quaternion", "Vector3"))
+    odometry_frame = MAP_FRAME if frame == "map" else ODOMETRY_FRAME
     path = Path(path)
     plugin = rosbags.rosbag2.StoragePlugin.MCAP if storage == "mcap" else rosbags.rosbag2.StoragePlugin.SQLITE3
     with rosbags.rosbag2.Writer(path, version=8, storage_plugin=plugin) as writer:
         odom = writer.add_connection(odometry, ODOMETRY, typestore=typestore)
-        rings = []
-        for first, pattern in ((0, sonar), (N_SONAR, ir)):
-            topics = ring_topics(pattern, "sonar" if first == 0 else "ir")
-            kind = RANGE if len(topics) > 1 else SCAN
-            rings.append((first, kind, [writer.add_connection(t, kind, typestore=typestore) for t in topics]))
+        truth = (
+            None
+            if ground_truth_cm is None
+            else writer.add_connection(GROUND_TRUTH_TOPIC, ODOMETRY, typestore=typestore)
+        )
+        connections = [
+            (ring, [writer.add_connection(t, ring.msgtype, typestore=typestore) for t in ring.topics]) for ring in rings
+        ]
         for n, (xy, values) in enumerate(zip(odometry_xy, ranges_cm, strict=True)):
             ns = round(n * period_s * 1e9) + 10**9
-            message = types[ODOMETRY](
-                header=header(ns, "odom"),
-                child_frame_id="base_link",
-                pose=types["geometry_msgs/msg/PoseWithCovariance"](
-                    pose=types["geometry_msgs/msg/Pose"](
-                        position=point(x=float(xy[0]), y=float(xy[1]), z=0.0),
-                        orientation=quaternion(x=0.0, y=0.0, z=0.0, w=1.0),
-                    ),
-                    covariance=np.zeros(36),
-                ),
-                twist=types["geometry_msgs/msg/TwistWithCovariance"](
-                    twist=types["geometry_msgs/msg/Twist"](
-                        linear=vector(x=0.0, y=0.0, z=0.0), angular=vector(x=0.0, y=0.0, z=0.0)
-                    ),
-                    covariance=np.zeros(36),
-                ),
+            writer.write(
+                odom, ns, typestore.serialize_cdr(odometry_message(typestore, ns, xy, odometry_frame), ODOMETRY)
             )
-            writer.write(odom, ns, typestore.serialize_cdr(message, ODOMETRY))
+            if truth is not None and ground_truth_cm is not None:
+                message = odometry_message(typestore, ns, ground_truth_cm[n] / 100.0, MAP_FRAME)
+                writer.write(truth, ns, typestore.serialize_cdr(message, ODOMETRY))
             offset = 0
-            for first, kind, connections in rings:
-                for j, connection in enumerate(connections):
+            for ring, ring_connections in connections:
+                for j, connection in enumerate(ring_connections):
                     offset += 1000
-                    if kind == RANGE:
-                        msg = range_msg(ns + offset, float(values[first + j]), first + j)
+                    if ring.msgtype == RANGE:
+                        msg = range_message(typestore, ns + offset, float(values[ring.first + j]), ring.first + j)
                     else:
-                        msg = scan_msg(ns + offset, values[first : first + N_SONAR], first)
-                    writer.write(connection, ns + offset, typestore.serialize_cdr(msg, kind))
+                        msg = scan_message(
+                            typestore, ns + offset, values[ring.first : ring.first + N_SONAR], ring.first
+                        )
+                    writer.write(connection, ns + offset, typestore.serialize_cdr(msg, ring.msgtype))
     return path

@@ -5,25 +5,39 @@ stand-in robot of NomadOfficeReal-v0 drives to each cell by dead reckoning, K ti
 (16 sonar, 16 IR) under its odometry's cell, as a real robot would. --model noise: placed exactly on each cell,
 K noisy ideal readings; --model ideal: exact. A user with a real robot imports their log instead: a CSV file
 (--from-csv log.csv) or a ROS 2 bag (--from-bag BAG, needs pip install "sb3-twodrl[ros]"; its topics named by
---sonar-topic, --ir-topic, --odom-topic, --pose-topic). --check only loads and checks the map and prints what
+--sonar-topic, --ir-topic, --odom-topic, --pose-topic; each message checked: units, ranges, scan order, frame ids
+against --sonar-frame, --ir-frame; see docs/bags.md). An import prints its coverage (--coverage-png draws it).
+--check only loads and checks the map and prints what
 the robot sees of it.
 
     sb3-twodrl-record-database --map my_office.json --check
     sb3-twodrl-record-database --map my_office.json --out my_office_k8.npz
     sb3-twodrl-record-database --map my_office.json --from-csv robot_log.csv --out my_robot.npz
-    sb3-twodrl-record-database --map my_office.json --from-bag robot_bag --out my_robot.npz
+    sb3-twodrl-record-database --map my_office.json --from-bag robot_bag --out my_robot.npz --coverage-png cover.png
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.util
 from pathlib import Path
 
 import numpy as np
 
-from twodrl_envs.analysis.bags import IR_TOPIC, ODOMETRY_TOPIC, POSE_FRAMES, SONAR_TOPIC, import_bag
+from twodrl_envs.analysis.bags import (
+    IR_FRAME,
+    IR_RING_FRAME,
+    IR_TOPIC,
+    ODOMETRY_TOPIC,
+    POSE_FRAMES,
+    SONAR_FRAME,
+    SONAR_RING_FRAME,
+    SONAR_TOPIC,
+    import_bag,
+)
+from twodrl_envs.analysis.coverage import PLOTS_HINT, coverage, plot_coverage
 from twodrl_envs.analysis.dilemma import distance_to_goal
-from twodrl_envs.memorable.database import import_csv, load_database, save_database
+from twodrl_envs.memorable.database import SensorDatabase, import_csv, load_database, save_database
 from twodrl_envs.memorable.recording import record_database
 from twodrl_envs.nomad.core import ROUTE_CODES, OfficeCore, office_core
 from twodrl_envs.nomad.geometry import SHIPPED_MAPS, OfficeMap
@@ -92,6 +106,25 @@ def describe_map(core: OfficeCore) -> str:
     return "\n".join(lines)
 
 
+def _import(args: argparse.Namespace) -> SensorDatabase:
+    """The database of the command's CSV or bag import, complete or not (the command reports missing cells)."""
+    if args.from_csv is not None:
+        return import_csv(args.from_csv, map=args.map, require_all_cells=False, per_cell=args.k)
+    return import_bag(
+        args.from_bag,
+        map=args.map,
+        sonar=args.sonar_topic,
+        ir=args.ir_topic,
+        odometry=args.odom_topic,
+        pose=args.pose_topic,
+        pose_frame=args.pose_frame,
+        sonar_frame=args.sonar_frame,
+        ir_frame=args.ir_frame,
+        per_cell=args.k,
+        require_all_cells=False,
+    )
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(
         prog="sb3-twodrl-record-database", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
@@ -133,8 +166,19 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument(
         "--pose-topic",
         default=None,
-        help="bag: where the readings were taken: an Odometry, PoseStamped or PoseWithCovarianceStamped topic "
-        "(default: --odom-topic)",
+        help="bag: where the readings were taken: an Odometry, PoseStamped or PoseWithCovarianceStamped topic, "
+        "read instead of --odom-topic (which the bag then need not hold; default: --odom-topic)",
+    )
+    parser.add_argument(
+        "--sonar-frame",
+        default=None,
+        help=f"bag: the sonar messages' frame ids, a pattern with {{i}} for Range topics (default {SONAR_FRAME}, "
+        f"or {SONAR_RING_FRAME} for a LaserScan)",
+    )
+    parser.add_argument(
+        "--ir-frame",
+        default=None,
+        help=f"bag: the infrared messages' frame ids, as --sonar-frame (default {IR_FRAME}, or {IR_RING_FRAME})",
     )
     parser.add_argument(
         "--pose-frame",
@@ -144,6 +188,12 @@ def main(argv: list[str] | None = None) -> None:
         "y left); map: the pose is in the map's frame, x east, y north (default start)",
     )
     parser.add_argument("--allow-missing", action="store_true", help="imports: allow reachable cells without readings")
+    parser.add_argument(
+        "--coverage-png",
+        type=Path,
+        default=None,
+        help="imports: draw the cells with readings to this PNG (needs matplotlib: the plots extra)",
+    )
     args = parser.parse_args(argv)
     if not args.check:
         if args.out is None:
@@ -156,6 +206,13 @@ def main(argv: list[str] | None = None) -> None:
             parser.error(f"--k must be >= 1, got {args.k}")
         if args.from_csv is not None and args.from_bag is not None:
             parser.error("pass --from-csv or --from-bag, not both")
+        if args.coverage_png is not None:
+            if args.from_csv is None and args.from_bag is None:
+                parser.error("--coverage-png draws an import's coverage: pass --from-csv or --from-bag")
+            if args.coverage_png.suffix != ".png" or not args.coverage_png.parent.is_dir():
+                parser.error(f"--coverage-png must be a .png in an existing directory, got {str(args.coverage_png)!r}")
+            if importlib.util.find_spec("matplotlib") is None:
+                parser.error(f"--coverage-png: {PLOTS_HINT}")
     try:
         core = office_core(args.map)
     except (ValueError, TypeError) as err:
@@ -164,26 +221,22 @@ def main(argv: list[str] | None = None) -> None:
     if args.check:
         return
     k = 8 if args.k is None else args.k
-    if args.from_csv is not None:
-        try:
-            db = import_csv(args.from_csv, map=args.map, require_all_cells=not args.allow_missing, per_cell=args.k)
-        except ValueError as err:
-            parser.error(f"--from-csv: {err}")
-    elif args.from_bag is not None:
-        try:
-            db = import_bag(
-                args.from_bag,
-                map=args.map,
-                sonar=args.sonar_topic,
-                ir=args.ir_topic,
-                odometry=args.odom_topic,
-                pose=args.pose_topic,
-                pose_frame=args.pose_frame,
-                per_cell=args.k,
-                require_all_cells=not args.allow_missing,
-            )
-        except (ValueError, ModuleNotFoundError) as err:  # one line: what is wrong with the bag, or what to install
-            parser.exit(2, f"{parser.prog}: error: --from-bag: {err}\n")
+    if args.from_csv is not None or args.from_bag is not None:
+        flag = "--from-csv" if args.from_csv is not None else "--from-bag"
+        try:  # one line: what is wrong with the log, or what to install
+            db = _import(args)
+            report = coverage(db, core)
+            print(report.describe())
+            picture = "" if args.coverage_png is None else f" (drawn: {plot_coverage(db, core, args.coverage_png)})"
+            if len(report.missing_cm) and not args.allow_missing:
+                raise ValueError(
+                    f"{len(report.missing_cm)} of {report.reachable} reachable cells have no readings (e.g. "
+                    f"{report.missing_examples()}){picture}; drive there and import again, or pass --allow-missing "
+                    "(cells without readings then count as obstacles)"
+                )
+            db.check_map(core, source=str(args.from_csv or args.from_bag))
+        except (ValueError, ModuleNotFoundError) as err:
+            parser.exit(2, f"{parser.prog}: error: {flag}: {err}\n")
     elif args.model == "realistic":
         db = record_database(k, map=args.map, model=RealisticModel(), seed=args.seed)
     else:
