@@ -265,6 +265,12 @@ class GoalRecord:
         return False
 
     @property
+    def passed(self) -> bool:
+        """Whether any check reached ``success_threshold`` (False when it is None)."""
+        threshold = self.success_threshold
+        return threshold is not None and any(c.goal_rate >= threshold for c in self.checks)
+
+    @property
     def learned(self) -> bool:
         """Whether the last ``patience`` checks all reached ``success_threshold``."""
         recent = self.checks[-self.patience :]

@@ -33,6 +33,7 @@ import argparse
 import ast
 import copy
 import json
+import sys
 import warnings
 from pathlib import Path
 from typing import Any
@@ -221,6 +222,26 @@ as Python literals) the env's input stage goes before the actor: the Nomad envs'
 """
 
 
+def unlearned_warning(model_path: str | Path) -> str | None:
+    """What to warn of when exporting the model at ``model_path``: None, unless the train command's record beside it
+    (``goal_checks.json``, :mod:`twodrl_zoo.manager`) shows that no goal check passed."""
+    from twodrl_zoo.manager import CHECKS_FILE
+
+    record_path = Path(model_path).parent / CHECKS_FILE
+    if not record_path.is_file():
+        return None
+    record = json.loads(record_path.read_text())
+    checks = record.get("checks") or []
+    threshold = record.get("threshold", 0.8)
+    if not checks or record.get("passed", any(c["goal_rate"] >= threshold for c in checks)):
+        return None
+    best = max(c["goal_rate"] for c in checks)
+    return (
+        f"no goal check of this run passed ({record_path}: best goal rate {best:.2f} < {threshold} in "
+        f"{record['num_timesteps']:,} steps): this policy has not learned its task and will likely not reach the goal"
+    )
+
+
 def main(argv: list[str] | None = None) -> None:
     """``sb3-twodrl-export``: load a saved model and write its deterministic actor (:data:`HELP`)."""
     from sb3_twodrl import ALGOS
@@ -245,6 +266,9 @@ def main(argv: list[str] | None = None) -> None:
         except ValueError as err:
             parser.error(str(err))
     model = ALGOS[args.algo].load(args.model, device="cpu")
+    warning = unlearned_warning(args.model)
+    if warning is not None:
+        print(f"sb3-twodrl-export: WARNING: {warning}", file=sys.stderr)
     if args.format == "onnx":
         print(f"wrote {export_onnx(model, args.out, input_stage=stage)}")
     else:

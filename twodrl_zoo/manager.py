@@ -5,14 +5,16 @@ What it changes of rl-zoo3's (everything else, every option, the run folder, is 
 
 - **settings**: the env's task facts derive settings (:func:`twodrl_zoo.hyperparams.derived_settings`) that go
   between the hyperparameter file and what the user passes (:func:`twodrl_zoo.hyperparams.resolve`): the file
-  < the task < ``--hyperparams`` (and ``-n``), and where goal checks stop training once learned the derived budget
-  becomes a ceiling :data:`CEILING` times as long (unless the user gives one); the training envs get the task's
+  < the task < ``--hyperparams`` (and ``-n``), and where goal checks stop training once learned the budget (the
+  derived one, or the file's, e.g. the paper's office's 1M steps) becomes a ceiling :data:`CEILING` times as long
+  (unless the user gives one); the training envs get the task's
   training options, the evaluation envs its test options (a map's start, its time limit) unless the user gives
   their own;
 - **goal checks**: the evaluation is :class:`sb3_twodrl.callbacks.GoalCheckCallback`, which keeps the policy with
   the best goal rate and stops once :data:`PATIENCE` checks in a row reach :data:`SUCCESS_THRESHOLD`; the model
-  saved as ``<env>.zip`` is the kept one, and ``goal_checks.json`` in the run folder says which check it was, what
-  every check gave and how long training took;
+  saved as ``<env>.zip`` is the kept one, and ``goal_checks.json`` in the run folder says which check it was,
+  whether any check passed, what every check gave and how long training took; :data:`SAVED` lists the run
+  folders this process saved (the train command reports on its own run, not on a folder guessed from argv);
 - **batched envs**: where the registry gives the env a same-step-autoreset vector entry point
   (:func:`twodrl_zoo.vec_env.has_batched_env`) and the entry wraps nothing, the training and evaluation envs are
   that batch (:class:`~twodrl_zoo.vec_env.VectorEnvAdapter`, under one ``VecMonitor``): the same episodes as
@@ -45,7 +47,7 @@ from sb3_twodrl.callbacks import GoalCheckCallback
 from twodrl_zoo.hyperparams import derived_settings, resolve
 from twodrl_zoo.vec_env import has_batched_env, make_train_env
 
-__all__ = ["CEILING", "CHECKS_FILE", "PATIENCE", "SUCCESS_THRESHOLD", "ExperimentManager"]
+__all__ = ["CEILING", "CHECKS_FILE", "PATIENCE", "SAVED", "SUCCESS_THRESHOLD", "ExperimentManager"]
 
 SUCCESS_THRESHOLD = 0.8
 """The goal rate a check must reach (the office's "learned": 80% of test trials, paper section 3.4)."""
@@ -57,6 +59,8 @@ before, so the ceiling costs only the runs that have not learned (on the develop
 reliability``: 31 of 32 runs learned with it, 28 with the budget alone, at most 29 with a restart)."""
 CHECKS_FILE = "goal_checks.json"
 """The run folder's record of the goal checks, the kept policy and the training time."""
+SAVED: list[str] = []
+"""The run folders (rl-zoo3's ``save_path``) this process saved a model to, the latest last."""
 
 
 class ExperimentManager(ZooExperimentManager):
@@ -68,20 +72,17 @@ class ExperimentManager(ZooExperimentManager):
         bound.apply_defaults()
         given = bound.arguments
         given.pop("self")
+        stops = given["eval_freq"] > 0 and not given["optimize_hyperparameters"]
+        user_budget = given["n_timesteps"] > 0 or "n_timesteps" in (given.get("hyperparams") or {})
+        self.ceiling = entry is None and stops and not user_budget  # the budget's a ceiling CEILING times as long
         derived = None if entry is not None else derived_settings(given["env_id"], given.get("env_kwargs"))
         if derived is not None:
             resolved = resolve(
                 {}, derived, given.get("hyperparams"), given.get("env_kwargs"), given.get("eval_env_kwargs")
             )
-            over_file = {k: v for k, v in resolved.entry.items() if k != "env_kwargs"}
-            note = derived.note
-            stops = given["eval_freq"] > 0 and not given["optimize_hyperparameters"]
-            if stops and given["n_timesteps"] <= 0 and "n_timesteps" not in (given.get("hyperparams") or {}):
-                over_file["n_timesteps"] = CEILING * over_file["n_timesteps"]
-                note += f"; training stops once learned, at most {over_file['n_timesteps']:,} steps"
-            given["hyperparams"] = over_file
+            given["hyperparams"] = {k: v for k, v in resolved.entry.items() if k != "env_kwargs"}
             given["env_kwargs"], given["eval_env_kwargs"] = resolved.env_kwargs, resolved.eval_env_kwargs
-            print(f"sb3-twodrl: {note}", flush=True)
+            print(f"sb3-twodrl: {derived.note}", flush=True)
         super().__init__(**given)
         self.entry, self.batched = entry, batched
         self.goal_checks: GoalCheckCallback | None = None
@@ -90,7 +91,16 @@ class ExperimentManager(ZooExperimentManager):
     def read_hyperparameters(self) -> tuple[dict[str, Any], dict[str, Any]]:
         """rl-zoo3's, or where the constructor was given an ``entry``, that entry (``hyperparams`` over it)."""
         if self.entry is None:
-            return super().read_hyperparameters()
+            hyperparams, saved = super().read_hyperparameters()
+            if self.ceiling:
+                budget = int(float(hyperparams["n_timesteps"]))
+                hyperparams["n_timesteps"] = saved["n_timesteps"] = CEILING * budget
+                print(
+                    f"sb3-twodrl: budget {budget:,} steps; training stops once learned, at most "
+                    f"{CEILING * budget:,} steps",
+                    flush=True,
+                )
+            return hyperparams, saved
         hyperparams = {**copy.deepcopy(self.entry), **(self.custom_hyperparams or {})}
         return hyperparams, OrderedDict(sorted(hyperparams.items()))
 
@@ -137,8 +147,12 @@ class ExperimentManager(ZooExperimentManager):
             "n_timesteps": self.n_timesteps,
             "checks": [] if checks is None else [vars(c) for c in checks.checks],
             "kept": None if checks is None or checks.kept is None else vars(checks.kept),
+            "passed": None if checks is None else checks.record.passed,
             "learned_at": None if checks is None else checks.learned_at,
+            "threshold": SUCCESS_THRESHOLD,
+            "check_episodes": self.n_eval_episodes,
             "test_env_kwargs": self.eval_env_kwargs,
         }
         with open(os.path.join(self.save_path, CHECKS_FILE), "w") as f:
             json.dump(record, f, indent=1, default=str)
+        SAVED.append(self.save_path)

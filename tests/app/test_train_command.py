@@ -21,6 +21,8 @@ from twodrl_zoo.zoo import _dict_options
         (["--env", "NomadOfice-v0"], "env 'NomadOfice-v0' is not registered; did you mean 'NomadOffice-v0'?"),
         (["--env", "NomadOffice-v0", "--env-kwargs", "map:three_rooms.json"], """map:'"my_office.json"'"""),
         (["--env", "NomadOffice-v0", "--env-kwargs", "map:'nope.json'"], "nope.json does not exist"),
+        (["--env", "NomadOffice-v0", "-n", "-1000"], "-n/--n-timesteps must be a positive number of steps, got '-1000'"),
+        (["--env", "NomadOffice-v0", "--n-timesteps=0"], "must be a positive number of steps, got '0'"),
         (
             ["--env", "NomadOfficeMemorable-v0", "--env-kwargs", "database:'gone.npz'"],
             f"{Path('gone.npz').resolve()} does not exist: record one with `sb3-twodrl-record-database",
@@ -78,34 +80,37 @@ def test_export_help_is_plain_text(capsys: pytest.CaptureFixture[str]) -> None:
     assert "--input-stage" in out and not any(markup in out for markup in ("``", ":func:", ":class:", "::"))
 
 
+@pytest.mark.parametrize("env_kwargs", [{"map": "generated:S:3"}, None], ids=["derived", "paper's office"])
 @pytest.mark.parametrize(
     ("options", "factor"),
     [({}, 2), ({"eval_freq": -1}, 1), ({"n_timesteps": 5000}, 1), ({"hyperparams": {"n_timesteps": 5000}}, None)],
 )
-def test_the_derived_budget_is_a_ceiling_twice_as_long_only_where_checks_stop_training(
-    tmp_path: Path, options: dict, factor: int | None
+def test_the_budget_is_a_ceiling_twice_as_long_only_where_checks_stop_training(
+    tmp_path: Path, env_kwargs: dict | None, options: dict, factor: int | None
 ) -> None:
+    """The derived budget, and the paper's office's packaged one (the README's first command), alike."""
     import argparse
 
     from twodrl_zoo.manager import CEILING, ExperimentManager
     from twodrl_zoo.zoo import register_zoo
 
     register_zoo()
-    derived = derived_settings("NomadOffice-v0", {"map": "generated:S:3"})
-    assert derived is not None and CEILING == 2
+    derived = derived_settings("NomadOffice-v0", env_kwargs)
+    written = int(float(read_entry(hyperparams_path("twoda2c"), "NomadOffice-v0")["n_timesteps"]))
+    base = written if derived is None else derived.hyperparams["n_timesteps"]
+    assert CEILING == 2 and (derived is None) == (env_kwargs is None)
     manager = ExperimentManager(
         argparse.Namespace(),
         "twoda2c",
         "NomadOffice-v0",
         str(tmp_path),
-        env_kwargs={"map": "generated:S:3"},
+        env_kwargs=env_kwargs,
         config=str(hyperparams_path("twoda2c")),
         **options,
     )
-    budget = manager.custom_hyperparams["n_timesteps"]
-    assert budget == (5000 if factor is None else factor * derived.hyperparams["n_timesteps"])
     read, _ = manager.read_hyperparameters()  # the packaged entry under the derived settings, as train reads it
-    assert read["policy"] == "MlpPolicy" and read["gamma"] == derived.hyperparams["gamma"]
+    assert read["n_timesteps"] == (5000 if factor is None else factor * base)
+    assert read["policy"] == "MlpPolicy" and read["gamma"] == (0.9 if derived is None else derived.hyperparams["gamma"])
 
 
 def test_the_bench_s_options_a_resolved_entry_as_it_is_and_a_monitor_per_env(tmp_path: Path) -> None:

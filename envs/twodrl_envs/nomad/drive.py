@@ -6,7 +6,7 @@ those functions on any Nomad env ID, the stand-in robots ``NomadOfficeReal-v0`` 
 included, so that the same loop runs, unchanged, in simulation::
 
     robot = StandInRobot("NomadOfficeMuJoCo-v0", map="my_office.json", seed=0)
-    while not (robot.at_goal() or robot.collided()):
+    while not robot.ended():
         raw = np.concatenate([robot.sonar_cm(), robot.ir_cm(), robot.odometry_cm()])[None]  # (1, 34) float64
         robot.move_10cm(int(policy.run(["action"], {"obs": raw})[0][0]))
 
@@ -23,6 +23,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from gymnasium.envs.registration import load_env_creator
 
 from twodrl_envs.nomad import sensors
 
@@ -33,7 +34,10 @@ class StandInRobot:
     """One episode at a time of ``env_id`` (any Nomad ID) on ``map``, from the map's start, seeded ``seed``.
 
     ``options`` go to ``gym.make`` (e.g. ``model=`` of ``NomadOfficeReal-v0``); the odometry is always observed.
-    A move after the goal, a collision or the time limit is a ``RuntimeError``; :meth:`reset` starts again.
+    The episode's time limit is the map's test time limit (:attr:`time_limit`: the env's task facts, e.g. 480 steps
+    on an office whose farthest start is 160 moves; the registered 300 on the paper's maps) unless ``options``
+    give ``max_episode_steps``. A move after the goal, a collision or the time limit is a ``RuntimeError``
+    (:meth:`ended` says when); :meth:`reset` starts again.
     """
 
     def __init__(
@@ -45,7 +49,13 @@ class StandInRobot:
             raise ValueError("StandInRobot observes the sensors and the odometry: observe_odometry and observation")
         if map is not None:
             options["map"] = map
+        if "max_episode_steps" not in options:
+            facts = self._task_facts(env_id, options)
+            if facts is not None:
+                options["max_episode_steps"] = facts["test_options"]["max_episode_steps"]
         self.env = gym.make(env_id, disable_env_checker=True, **options)
+        self.time_limit: int = self.env.spec.max_episode_steps  # type: ignore[union-attr,assignment]
+        """The most moves of an episode (the test time limit); a move past it is refused."""
         space = self.env.observation_space
         if not isinstance(space, gym.spaces.Box) or space.shape != (OBSERVATION_SIZE,):
             raise ValueError(f"env_id {env_id!r} is not a Nomad env: its observations are {space}")
@@ -53,6 +63,15 @@ class StandInRobot:
         self._origin, self._extent = np.array([x0, y0]), np.array([x1 - x0, y1 - y0])
         self._span = sensors.HIGH_CM - sensors.LOW_CM
         self.reset(seed)
+
+    @staticmethod
+    def _task_facts(env_id: str, options: dict[str, Any]) -> dict[str, Any] | None:
+        """The facts the env's class states of its task with ``options`` (None: the registered defaults are it)."""
+        spec = gym.registry[env_id]
+        creator = load_env_creator(spec.entry_point) if isinstance(spec.entry_point, str) else spec.entry_point
+        state = getattr(creator, "task_facts", None)
+        facts = None if state is None else state(**{**spec.kwargs, **options})
+        return facts if isinstance(facts, dict) else None
 
     def reset(self, seed: int | None = None) -> None:
         """Put the robot back at the map's start; a new episode (``seed`` as ``Env.reset``'s)."""
@@ -95,6 +114,10 @@ class StandInRobot:
             self._ended = f"the time limit, {self.moves} moves"
 
     move = move_10cm
+
+    def ended(self) -> bool:
+        """Whether the episode is over: the goal reached, a collision, or :attr:`time_limit` moves made."""
+        return bool(self._ended)
 
     def at_goal(self) -> bool:
         """Whether the last move reached the goal."""
