@@ -47,6 +47,7 @@ FIELDS = (
 )  # fmt: skip
 DATABASE_FIELDS = (*FIELDS, "db_goal_rate")
 LINE = re.compile(r"goal rate (\d\.\d\d) \((\d+) of (\d+)")
+EXPORT = re.compile(r"^sb3-twodrl-train: export: (.*)$", re.MULTILINE)
 STAND_IN = re.compile(r"^goal rate on the stand-in robot: (\d\.\d\d)", re.MULTILINE)
 DOC = Path(__file__).resolve().parents[1] / "docs" / "own_office.md"
 
@@ -109,6 +110,9 @@ def run_database(
         clock = time.perf_counter()
         out = ""
         for command in [f"sb3-twodrl-map --seed {map_seed} --size {size} --out my_office.json", *commands]:
+            printed = EXPORT.findall(out)
+            if command.startswith("sb3-twodrl-export") and printed:
+                command = printed[-1]  # the doc: run the export line the train command printed
             done = subprocess.run(["bash", "-c", command], cwd=folder, capture_output=True, text=True)
             if done.returncode != 0:
                 raise RuntimeError(f"{command} failed:\n{done.stdout[-2000:]}\n{done.stderr[-2000:]}")

@@ -81,10 +81,15 @@ def timesteps_entry(arm: dict[str, Any], env: str, protocol: dict[str, Any]) -> 
     return entry
 
 
+STUDY_REVISION = 1
+"""The revision of the settings rule (:mod:`twodrl_zoo.recipe`) the committed studies ran with (their rows)."""
+
+
 def derived(env: str, env_kwargs: dict[str, Any]) -> Derived | None:
-    """What the task of ``env`` with the options ``env_kwargs`` derives
-    (:func:`twodrl_zoo.hyperparams.derived_settings`), None where it derives nothing (the paper's maps)."""
-    return derived_settings(env, env_kwargs)
+    """What the task of ``env`` with the options ``env_kwargs`` derives by the studies' rule
+    (:func:`twodrl_zoo.hyperparams.derived_settings`, revision :data:`STUDY_REVISION`), None where it derives
+    nothing (the paper's maps)."""
+    return derived_settings(env, env_kwargs, revision=STUDY_REVISION)
 
 
 def test_env_kwargs(env: str, env_kwargs: dict[str, Any]) -> dict[str, Any]:

@@ -11,7 +11,8 @@ What it changes of rl-zoo3's (everything else, every option, the run folder, is 
   training options, the evaluation envs its test options (a map's start, its time limit) unless the user gives
   their own;
 - **goal checks**: the evaluation is :class:`sb3_twodrl.callbacks.GoalCheckCallback`, which keeps the policy with
-  the best goal rate and stops once :data:`PATIENCE` checks in a row reach :data:`SUCCESS_THRESHOLD`; the model
+  the best goal rate and stops once :data:`PATIENCE` checks in a row reach :data:`SUCCESS_THRESHOLD` (each check
+  ``--eval-episodes`` episodes, or the task's own number where readings vary); the model
   saved as ``<env>.zip`` is the kept one, and ``goal_checks.json`` in the run folder says which check it was,
   whether any check passed, what every check gave and how long training took; :data:`SAVED` lists the run
   folders this process saved (the train command reports on its own run, not on a folder guessed from argv);
@@ -59,6 +60,9 @@ before, so the ceiling costs only the runs that have not learned (on the develop
 reliability``: 31 of 32 runs learned with it, 28 with the budget alone, at most 29 with a restart)."""
 CHECKS_FILE = "goal_checks.json"
 """The run folder's record of the goal checks, the kept policy and the training time."""
+ZOO_EVAL_EPISODES = 5
+"""rl-zoo3's ``--eval-episodes`` default: a task's own check episodes (:mod:`twodrl_zoo.recipe`) replace it only,
+so a user's other value wins."""
 SAVED: list[str] = []
 """The run folders (rl-zoo3's ``save_path``) this process saved a model to, the latest last."""
 
@@ -82,6 +86,8 @@ class ExperimentManager(ZooExperimentManager):
             )
             given["hyperparams"] = {k: v for k, v in resolved.entry.items() if k != "env_kwargs"}
             given["env_kwargs"], given["eval_env_kwargs"] = resolved.env_kwargs, resolved.eval_env_kwargs
+            if derived.check_episodes is not None and given["n_eval_episodes"] == ZOO_EVAL_EPISODES:
+                given["n_eval_episodes"] = derived.check_episodes
             print(f"sb3-twodrl: {derived.note}", flush=True)
         super().__init__(**given)
         self.entry, self.batched = entry, batched

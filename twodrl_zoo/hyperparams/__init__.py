@@ -28,7 +28,7 @@ from typing import Any
 
 import yaml
 
-from twodrl_zoo.recipe import Derived, derive
+from twodrl_zoo.recipe import REVISION, Derived, derive
 
 __all__ = [
     "PACKAGED",
@@ -172,11 +172,11 @@ def task_facts(env_id: str, env_kwargs: dict[str, Any] | None = None) -> dict[st
     return facts
 
 
-def derived_settings(env_id: str, env_kwargs: dict[str, Any] | None = None) -> Derived | None:
-    """The settings :func:`twodrl_zoo.recipe.derive` gives the task of ``env_id`` with ``env_kwargs``; None where
-    the env states no facts (:func:`task_facts`)."""
+def derived_settings(env_id: str, env_kwargs: dict[str, Any] | None = None, revision: int = REVISION) -> Derived | None:
+    """The settings :func:`twodrl_zoo.recipe.derive` (rule ``revision``) gives the task of ``env_id`` with
+    ``env_kwargs``; None where the env states no facts (:func:`task_facts`)."""
     facts = task_facts(env_id, env_kwargs)
-    return None if facts is None else derive(facts)
+    return None if facts is None else derive(facts, revision)
 
 
 @dataclass(frozen=True)

@@ -57,13 +57,20 @@ in filing order: the drive as the robot would log it (``twodrl_envs.analysis.bag
 
 
 def drive_and_record(
-    core: OfficeCore, model: RealisticModel, k: int, seed: int, max_tries: int = 20, log: Log | None = None
+    core: OfficeCore,
+    model: RealisticModel,
+    k: int,
+    seed: int,
+    max_tries: int = 20,
+    log: Log | None = None,
+    progress: bool = False,
 ) -> tuple[np.ndarray, list[np.ndarray], dict[str, Any]]:
     """``k`` tours over the reachable cells; returns ``(counts, readings per cell, statistics)``.
 
     A run whose true pose bumps into a wall is driven again with fresh keys (the operator puts the
     robot back at the start), up to ``max_tries`` times; a cell whose run never succeeds gets fewer
-    than ``k`` readings. ``log`` (:data:`Log`) sees each batch of readings as it is filed.
+    than ``k`` readings. ``log`` (:data:`Log`) sees each batch of readings as it is filed; ``progress`` shows a
+    bar of the tours.
     """
     if isinstance(k, bool) or not isinstance(k, int) or k < 1:
         raise ValueError(f"k must be a positive int, got {k!r}")
@@ -79,7 +86,12 @@ def drive_and_record(
     rng = np.random.default_rng(seed)
     per_cell: list[list[np.ndarray]] = [[] for _ in range(len(core.lattice.cells))]
     bumps, errors = 0, []
-    for _ in range(k):
+    tours: Any = range(k)
+    if progress:
+        from tqdm import tqdm
+
+        tours = tqdm(tours, desc=f"recording {len(cells)} cells", unit="tour")
+    for _ in tours:
         todo = np.arange(len(cells))
         for _ in range(max_tries):
             if len(todo) == 0:
@@ -150,7 +162,7 @@ def record_database(
         raise ValueError("pass either model (the stand-in robot) or noise (noisy ideal sensors), not both")
     core = office_core(map)
     if model is not None:
-        counts, per_cell, stats = drive_and_record(core, model, k, seed, log=log)
+        counts, per_cell, stats = drive_and_record(core, model, k, seed, log=log, progress=progress)
         recording = {
             "source": "simulated",
             "sensor_model": "realistic (twodrl_envs.nomad.realistic.RealisticModel, NomadOfficeReal-v0)",
