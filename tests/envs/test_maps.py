@@ -179,3 +179,36 @@ def test_record_command_writes_a_database_the_env_replays(tmp_path, capsys):
 def test_dilemma_figures_need_route_regions():
     with pytest.raises(ValueError, match="has no route regions"):
         measure(office_core("corridor"), 300)
+
+
+def _desk_map(tmp_path, start, goal):
+    import json
+
+    data = {
+        "bounds": [0, 0, 400, 200],
+        "walls": [
+            [0, 0, 400, 0],
+            [400, 0, 400, 200],
+            [400, 200, 0, 200],
+            [0, 200, 0, 0],
+            [200, 0, 200, 60],
+            [200, 140, 200, 200],
+        ],
+        "obstacles": [[[260, 20], [390, 20], [390, 180], [260, 180]]],
+        "start": start,
+        "regions": {"goal": goal},
+    }
+    path = tmp_path / "desk.json"
+    path.write_text(json.dumps(data))
+    return str(path)
+
+
+def test_a_goal_or_a_start_inside_a_desk_is_named_as_such(tmp_path):
+    import gymnasium as gym
+    import pytest
+
+    with pytest.raises(ValueError, match=r"the goal \[290.0, 60.0, 360.0, 140.0\] lies inside obstacles\[0\]"):
+        gym.make("NomadOffice-v0", map=_desk_map(tmp_path, [60, 100], [290, 60, 360, 140]))
+    with pytest.raises(ValueError, match=r"start \(300.0, 100.0\) is inside obstacles\[0\]; move it onto the floor"):
+        gym.make("NomadOffice-v0", map=_desk_map(tmp_path, [300, 100], [60, 0, 150, 200]))
+    gym.make("NomadOffice-v0", map=_desk_map(tmp_path, [60, 100], [210, 60, 240, 140])).close()  # in front: fine

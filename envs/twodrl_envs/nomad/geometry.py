@@ -14,7 +14,7 @@ import numpy as np
 ROBOT_RADIUS_CM = 30.0
 STEP_CM = 10.0
 ROUTE_REGIONS = ("shortcut", "detour")
-"""The route regions' names, the route labels (:data:`twodrl_envs.nomad.core.ROUTES` gives their codes)."""
+"""The route regions' names, the route labels (:data:`twodrl_envs.nomad.core.ROUTE_CODES` gives their codes)."""
 
 
 @dataclass(frozen=True)
@@ -32,6 +32,8 @@ class OfficeMap:
     start: tuple[float, float]
     regions: dict[str, tuple[float, float, float, float]]
     source: str
+    obstacles: tuple[np.ndarray, ...] = ()
+    """The obstacle polygons ``(k, 2)`` as drawn (their edges are among ``walls``): to say what lies inside one."""
 
     def inside_bounds(self, xy: np.ndarray) -> np.ndarray:
         """True where a point ``(..., 2)`` lies inside the map's bounding box."""
@@ -41,6 +43,19 @@ class OfficeMap:
     def has_routes(self) -> bool:
         """Whether the map labels routes (``shortcut`` and ``detour`` regions); without them no route is reported."""
         return ROUTE_REGIONS[0] in self.regions
+
+    def obstacle_at(self, xy: tuple[float, float] | np.ndarray) -> int | None:
+        """The index of the obstacle polygon the point ``xy`` lies inside (even-odd rule), None if none."""
+        x, y = float(xy[0]), float(xy[1])
+        for index, poly in enumerate(self.obstacles):
+            x0, y0 = poly[:, 0], poly[:, 1]
+            x1, y1 = np.roll(x0, -1), np.roll(y0, -1)
+            crosses = (y0 > y) != (y1 > y)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                at = x0 + (y - y0) * (x1 - x0) / (y1 - y0)
+            if int(np.count_nonzero(crosses & (x < at))) % 2 == 1:
+                return index
+        return None
 
     def in_region(self, name: str, xy: np.ndarray) -> np.ndarray:
         """True where a point ``(..., 2)`` lies in the named rectangle (nowhere for a region the map lacks)."""
@@ -127,6 +142,7 @@ def parse_map(data: dict, source: str) -> OfficeMap:
     if not (bounds[0] < bounds[2] and bounds[1] < bounds[3]):
         raise ValueError(f"map file {source}: bounds must be [xmin, ymin, xmax, ymax] with min < max, got {bounds}")
     segments: list[tuple[float, ...]] = []
+    polygons: list[np.ndarray] = []
     if not isinstance(data["walls"], list) or not data["walls"]:
         raise ValueError(f"map file {source}: walls must be a non-empty list of segments, got {data['walls']!r}")
     for i, wall in enumerate(data["walls"]):
@@ -138,6 +154,7 @@ def parse_map(data: dict, source: str) -> OfficeMap:
             raise ValueError(f"map file {source}: obstacles[{i}] must list at least 3 vertices, got {poly!r}")
         verts = [_number_list(v, 2, f"obstacles[{i}] vertex", source) for v in poly]
         segments += [(*verts[k], *verts[(k + 1) % len(verts)]) for k in range(len(verts))]
+        polygons.append(np.array(verts, dtype=np.float64))
     walls = np.array(segments, dtype=np.float64)
     if np.any(np.hypot(walls[:, 2] - walls[:, 0], walls[:, 3] - walls[:, 1]) == 0.0):
         raise ValueError(f"map file {source}: a wall segment has zero length")
@@ -160,8 +177,11 @@ def parse_map(data: dict, source: str) -> OfficeMap:
         if not _overlaps(rect, bounds):
             raise ValueError(f"map file {source}: regions.{name} {list(rect)} lies outside the bounds {list(bounds)}")
         regions[name] = rect  # type: ignore[assignment]
-    office = OfficeMap(str(data.get("name", Path(source).stem)), bounds, walls, start, regions, source)  # type: ignore[arg-type]
+    office = OfficeMap(str(data.get("name", Path(source).stem)), bounds, walls, start, regions, source, tuple(polygons))  # type: ignore[arg-type]
     start_xy = np.array(start)
+    inside = office.obstacle_at(start_xy)
+    if inside is not None:
+        raise ValueError(f"map file {source}: start {start} is inside obstacles[{inside}]; move it onto the floor")
     if not office.inside_bounds(start_xy) or clearance(start_xy[None], walls)[0] <= ROBOT_RADIUS_CM:
         raise ValueError(f"map file {source}: start {start} is outside the map or the robot there touches a wall")
     points = np.prod([np.floor((hi - lo) / STEP_CM) + 1 for lo, hi in ((bounds[0], bounds[2]), (bounds[1], bounds[3]))])
@@ -346,6 +366,13 @@ def check_goal_reachable(office: OfficeMap, lattice: Lattice) -> None:
             "cannot stand in it; widen it or move its walls"
         )
     if not (in_goal & lattice.reachable).any():
+        inside = [office.obstacle_at(xy) for xy in lattice.cells[in_goal]]
+        if all(index is not None for index in inside):
+            raise ValueError(
+                f"map file {office.source}: the goal {goal} lies inside obstacles{sorted(set(inside))} (every free "
+                "lattice cell of the goal is inside the polygon, where the robot cannot go); put the goal region on "
+                "the floor, e.g. in front of the obstacle"
+            )
         raise ValueError(
             f"map file {office.source}: the goal {goal} cannot be reached from the start {start}: "
             f"{reached} of {len(lattice.cells)} free lattice cells are reachable, none in the goal; the goal's "
