@@ -1,49 +1,32 @@
 """A top-down picture of ``NomadOfficeMuJoCo-v0``'s MuJoCo scene (docs/mujoco.md): the paper's office and a
-generated one, rendered offscreen by MuJoCo (needs an OpenGL context without a display: ``MUJOCO_GL=egl``).
+generated one side by side, each the env's ``render()`` (``render_mode="rgb_array"``: MuJoCo's offscreen
+rendering, headless through EGL) with the robot at the map's start. Needs the ``mujoco`` extra only.
 
-    MUJOCO_GL=egl python scripts/render_mujoco.py --out docs/mujoco_offices.png
+    python scripts/render_mujoco.py --out docs/mujoco_offices.png
 """
 
 from __future__ import annotations
 
 import argparse
-import os
 import sys
+import warnings
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "envs"))  # this checkout's envs
-
+import gymnasium as gym
 import numpy as np
 
-from twodrl_envs.nomad.core import office_core
-from twodrl_envs.nomad.physics import MuJoCoRobot
-
-PIXELS_PER_M = 160
+import twodrl_envs  # noqa: F401  (registers the IDs)
 
 
-def top_down(map_name: str | None) -> np.ndarray:
-    """An orthographic top-down frame of the map's MuJoCo scene, the robot at the start."""
-    import mujoco
-
-    robot = MuJoCoRobot(office_core(map_name))
-    model, data = robot.mjmodel, robot.data
-    robot.reset_motion(np.array(robot.core.office.start))
-    x0, y0, x1, y1 = (v / 100.0 for v in robot.core.office.bounds)
-    width, height = round((x1 - x0 + 0.2) * PIXELS_PER_M), round((y1 - y0 + 0.2) * PIXELS_PER_M)
-    model.vis.global_.offwidth, model.vis.global_.offheight = max(width, 640), max(height, 480)
-    skins = [i for i in range(model.ngeom) if model.geom(i).name.startswith("skin")]
-    model.geom_rgba[skins] = (0.25, 0.25, 0.3, 1.0)  # the walls' contact capsules, seen from above
-    camera = mujoco.MjvCamera()
-    camera.lookat[:] = ((x0 + x1) / 2, (y0 + y1) / 2, 0.0)
-    model.vis.global_.fovy = 4.0  # from far above: the walls' sides barely show
-    fovy = np.deg2rad(model.vis.global_.fovy)
-    camera.distance = (y1 - y0 + 0.2) / 2 / np.tan(fovy / 2) + 1.0
-    camera.elevation, camera.azimuth = -90.0, 90.0
-    options = mujoco.MjvOption()
-    options.geomgroup[:] = 1
-    with mujoco.Renderer(model, height, width) as renderer:
-        renderer.update_scene(data, camera, options)
-        return renderer.render()
+def start_frame(map_name: str | None) -> np.ndarray:
+    """The env's MuJoCo frame of ``map_name`` with the robot at the start; an error where MuJoCo cannot render."""
+    env = gym.make("NomadOfficeMuJoCo-v0", map=map_name, render_mode="rgb_array", disable_env_checker=True)
+    env.reset(seed=0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)  # the env's fallback to the lattice picture
+        frame = env.render()
+    env.close()
+    return np.asarray(frame)
 
 
 def main() -> None:
@@ -51,8 +34,10 @@ def main() -> None:
     parser.add_argument("--maps", nargs="+", default=["office", "generated:M:7"], help="maps, side by side")
     parser.add_argument("--out", type=Path, default=Path("docs/mujoco_offices.png"))
     args = parser.parse_args()
-    os.environ.setdefault("MUJOCO_GL", "egl")
-    frames = [top_down(name) for name in args.maps]
+    try:
+        frames = [start_frame(name) for name in args.maps]
+    except RuntimeWarning as warning:
+        sys.exit(f"render_mujoco.py: {warning}")
     height = max(f.shape[0] for f in frames)
     gap = np.full((height, 20, 3), 255, dtype=np.uint8)
     padded = [np.pad(f, ((height - f.shape[0], 0), (0, 0), (0, 0)), constant_values=255) for f in frames]

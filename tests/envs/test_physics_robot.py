@@ -1,29 +1,39 @@
 """``NomadOfficeMuJoCo-v0``: the stand-in robot on MuJoCo reads what the lattice simulator computes where it stands
 on a lattice point, collides by contact and stays outside the wall, repeats seeded episodes exactly, and runs
-any policy of ``NomadOffice-v0``'s spaces (issue 60's checks)."""
+any policy of ``NomadOffice-v0``'s spaces (issue 60's checks); its model files are its sensors' poses, its
+``render()`` the MuJoCo scene, its lattice picture ``render_mode="lattice_rgb_array"``, and docs/mujoco.md's robot
+loop ends at the time limit (issue 65, part 5)."""
 
 from __future__ import annotations
 
+import hashlib
+import importlib.util
+import re
 import subprocess
 import sys
+import warnings
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 import pytest
 
-pytest.importorskip("mujoco")
+if importlib.util.find_spec("mujoco") is None:
+    pytest.skip("needs mujoco (the mujoco extra)", allow_module_level=True)
 
 from stable_baselines3.common.vec_env import DummyVecEnv
 
 import twodrl_envs  # noqa: F401
-from tests.cloned_policy import cloned_model, reaches_goal
+from tests.helpers.cloned_policy import cloned_model, reaches_goal
 from twodrl_bench.trials import trial_outcomes
 from twodrl_envs.nomad.core import office_core
 from twodrl_envs.nomad.geometry import MOVES_CM, ROBOT_RADIUS_CM, clearance, swept_clearance
-from twodrl_envs.nomad.physics import SPEED_CM_S, TIMESTEP_S, MuJoCoRobot
+from twodrl_envs.nomad.physics import ROBOT_MJCF, SENSOR_HEIGHT_CM, SPEED_CM_S, MuJoCoRobot, import_mujoco, office_model
 from twodrl_envs.nomad.realistic import INCH_CM
 from twodrl_envs.nomad.sensors import BEARINGS, HIGH_CM
 
+mujoco = import_mujoco()  # as the env imports it (headless: MUJOCO_GL=egl unless set)
+ROOT = Path(__file__).resolve().parents[2]
 ID = "NomadOfficeMuJoCo-v0"
 
 
@@ -174,8 +184,14 @@ def test_a_policy_that_reaches_the_goal_runs_and_its_trials_repeat() -> None:
         ({"model": "realistic"}, TypeError, "model must be a RealisticModel or None, got str"),
         ({"observation": "cell"}, ValueError, "observation='cell' needs a robot that moves on the lattice"),
         ({"progress": 0.05}, ValueError, "progress=0.05 needs a robot that moves on the lattice"),
+        (
+            {"render_mode": "ansi"},
+            ValueError,
+            re.escape("render_mode must be None or one of ['rgb_array', 'lattice_rgb_array'], got 'ansi'"),
+        ),
     ],
 )
+@pytest.mark.filterwarnings("ignore:.*not in the possible render_modes")  # gymnasium warns before we raise
 def test_bad_options_are_errors_naming_them(options: dict, error: type, match: str) -> None:
     with pytest.raises(error, match=match):
         gym.make(ID, **options)
@@ -222,15 +238,170 @@ def test_a_long_drive_never_enters_a_wall_and_collides_only_by_contact() -> None
     contact in MuJoCo."""
     env = gym.make(ID, map="generated:M:5")
     robot, walls = env.unwrapped.robot, env.unwrapped.core.office.walls
+    step_s = robot.mjmodel.opt.timestep
     rng = np.random.default_rng(0)
     env.reset(seed=0)
     collisions = 0
     for _ in range(3000):
         _, _, terminated, truncated, info = env.step(int(rng.integers(4)))
-        assert clearance(robot.position_cm()[None], walls)[0] > ROBOT_RADIUS_CM - SPEED_CM_S * TIMESTEP_S
+        assert clearance(robot.position_cm()[None], walls)[0] > ROBOT_RADIUS_CM - SPEED_CM_S * step_s
         if info["collision"]:
             collisions += 1
             assert robot.contact
         if terminated or truncated:
             env.reset()
     assert collisions > 50
+
+
+# --- the robot as a MuJoCo model (issue 65, part 5) ------------------------------------------------------------------
+
+
+def _sensor_poses(xy_cm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The sensor model's origins (m, ``(16, 3)``) and axes ``(16, 3)`` of a robot at ``xy_cm``: sensor ``i`` on the
+    body's surface at ``BEARINGS[i]`` (counter-clockwise from north), :data:`SENSOR_HEIGHT_CM` above the floor."""
+    axes = np.stack([np.sin(BEARINGS), np.cos(BEARINGS), np.zeros(16)], axis=1)
+    origins = np.concatenate([xy_cm + ROBOT_RADIUS_CM * axes[:, :2], np.full((16, 1), SENSOR_HEIGHT_CM)], axis=1)
+    return origins / 100.0, axes
+
+
+@pytest.mark.parametrize(
+    "model_of",
+    [
+        lambda: mujoco.MjModel.from_xml_path(str(ROBOT_MJCF)),
+        lambda: mujoco.MjModel.from_xml_path(str(ROBOT_MJCF.with_name("scene.xml"))),
+        lambda: office_model(office_core("generated:S:3").office),
+    ],
+    ids=["robot file", "scene file", "env's model"],
+)
+def test_the_models_sites_are_the_sensor_models_poses(model_of) -> None:
+    """Each of the 16 sonar and 16 IR sites sits where the sensor model measures from, its z axis the sensor's
+    axis, wherever the robot stands: in the model file, in its scene and in the env's office."""
+    model = model_of()
+    data = mujoco.MjData(model)
+    for xy in (np.zeros(2), np.array([123.4, -56.7])):
+        data.qpos[:] = xy / 100.0
+        mujoco.mj_kinematics(model, data)
+        origins, axes = _sensor_poses(xy)
+        for ring in ("sonar", "ir"):
+            sites = [model.site(f"{ring}{i:02d}").id for i in range(16)]
+            np.testing.assert_allclose(data.site_xpos[sites], origins, rtol=0, atol=1e-9)
+            np.testing.assert_allclose(data.site_xmat[sites].reshape(16, 3, 3)[:, :, 2], axes, rtol=0, atol=1e-9)
+    assert data.site_xpos[model.site("sonar04").id][0] < xy[0] / 100.0  # docs/nomad.md: sensor 4 looks west
+
+
+def test_the_ir_rangefinders_read_the_envs_ideal_ir_ranges() -> None:
+    """Switched on, the model's 16 IR rangefinders read what the env's artifact-free IR reads (one ray along each
+    axis) at lattice cells of the paper's office."""
+    core = office_core(None)
+    robot = MuJoCoRobot(core, artifacts=False, heading_sd_rad=0.0)
+    model = office_model(core.office)
+    model.opt.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
+    data = mujoco.MjData(model)
+    adr = model.sensor_adr[[model.sensor(f"ir{i:02d}").id for i in range(16)]]
+    for cell in np.flatnonzero(core.lattice.reachable)[::25]:
+        xy = core.lattice.cells[cell]
+        data.qpos[:] = xy / 100.0
+        mujoco.mj_forward(model, data)
+        got = data.sensordata[adr] * 100.0
+        np.testing.assert_allclose(np.where(got < 0, np.inf, got), robot.ideal_ranges(xy)[16:], rtol=0, atol=1e-6)
+
+
+def _frames(render_mode: str, seed: int, actions: list[int]) -> list[np.ndarray]:
+    """The env's frames after reset(seed) and after each action (resetting where an episode ends)."""
+    env = gym.make(ID, render_mode=render_mode)
+    env.reset(seed=seed)
+    frames = [env.render()]
+    for action in actions:
+        _, _, terminated, truncated, _ = env.step(action)
+        frames.append(env.render())
+        if terminated or truncated:
+            env.reset()
+    env.close()
+    return frames
+
+
+def test_the_lattice_picture_under_its_new_name_is_the_old_render() -> None:
+    """``render_mode="lattice_rgb_array"`` draws, frame for frame, what ``render()`` drew before the MuJoCo scene
+    (the hash of the old code's frames on these seeded moves)."""
+    actions = np.random.default_rng(1).integers(4, size=20).tolist()
+    digest = hashlib.sha256(b"".join(frame.tobytes() for frame in _frames("lattice_rgb_array", 1, actions)))
+    assert digest.hexdigest() == "42ddc8c84ea6a2afb2b8ebc2287a2bf354141ab0d8abe1d16d71939c54c4645c"
+
+
+def test_render_draws_the_mujoco_scene_where_the_physics_has_the_robot() -> None:
+    """``render()`` is MuJoCo's offscreen picture, of the lattice picture's size and unlike it, and the robot in it
+    moves with the physics: after six moves north, the robot's colour is at its new pixel and gone from its old."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)  # the env's fallback where no OpenGL context can be made
+        try:
+            frames = _frames("rgb_array", 0, [0] * 6)
+        except RuntimeWarning as warning:
+            pytest.skip(f"no OpenGL back end for MuJoCo's offscreen rendering here: {warning}")
+    lattice = _frames("lattice_rgb_array", 0, [0] * 6)
+    for frame, picture in zip(frames, lattice, strict=True):
+        assert frame.dtype == np.uint8 and frame.shape == picture.shape and frame.shape[2] == 3
+        assert (frame != picture).any(axis=-1).mean() > 0.5
+    env = gym.make(ID).unwrapped
+    x0, _, _, y1 = env.core.office.bounds
+    start = np.array(env.core.office.start)
+
+    def pixel(frame: np.ndarray, xy: np.ndarray) -> np.ndarray:  # 15 cm east of the robot's centre: its body
+        col, row = round((xy[0] + 15.0 - x0) * 1.5 + 8), round((y1 - xy[1]) * 1.5 + 8)
+        return frame[row, col].astype(int)
+
+    moved = start + np.array([0.0, 60.0])
+    assert np.abs(pixel(frames[-1], moved) - pixel(frames[0], start)).max() <= 8
+    assert np.abs(pixel(frames[-1], start) - pixel(frames[0], start)).max() > 40
+
+
+def docs_robot_loop() -> str:
+    """docs/mujoco.md's robot loop (the python block of "The robot loop without a robot")."""
+    text = (ROOT / "docs" / "mujoco.md").read_text()
+    section = text[text.index("## The robot loop without a robot") :]
+    return section.split("```python\n", 1)[1].split("```", 1)[0]
+
+
+def _shuttling_policy(path: Path, turn_y_cm: float) -> None:
+    """An ONNX policy as ``sb3-twodrl-export --input-stage`` writes one (input ``obs``: the (n, 34) cm readings
+    and odometry, float64; output ``action``, (n,)) that moves north below ``turn_y_cm`` of odometry and south above it:
+    it shuttles between two cells, reaching neither the goal nor a wall."""
+    import onnx
+    from onnx import TensorProto, helper
+
+    nodes = [
+        helper.make_node("Gather", ["obs", "y_index"], ["y"], axis=1),
+        helper.make_node("Less", ["y", "turn"], ["below"]),
+        helper.make_node("Where", ["below", "north", "south"], ["action"]),
+    ]
+    constants = [
+        helper.make_tensor("y_index", TensorProto.INT64, [], [33]),
+        helper.make_tensor("turn", TensorProto.DOUBLE, [], [turn_y_cm]),
+        helper.make_tensor("north", TensorProto.INT64, [], [0]),
+        helper.make_tensor("south", TensorProto.INT64, [], [2]),
+    ]
+    graph = helper.make_graph(
+        nodes,
+        "shuttle",
+        [helper.make_tensor_value_info("obs", TensorProto.DOUBLE, ["n", 34])],
+        [helper.make_tensor_value_info("action", TensorProto.INT64, ["n"])],
+        constants,
+    )
+    onnx.save(helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)]), str(path))
+
+
+def test_the_docs_robot_loop_runs_as_written_and_stops_at_the_time_limit(tmp_path: Path) -> None:
+    """docs/mujoco.md's loop, as written, with a policy that never reaches the goal: it ends after the env's time
+    limit (the map's test time limit) instead of a ``RuntimeError``."""
+    pytest.importorskip("onnxruntime")
+    pytest.importorskip("onnx")
+    from twodrl_envs.nomad.drive import StandInRobot
+
+    office = ROOT / "envs" / "twodrl_envs" / "nomad" / "maps" / "office.json"
+    (tmp_path / "my_office.json").write_text(office.read_text())
+    _shuttling_policy(tmp_path / "policy.onnx", office_core(None).office.start[1] + 5.0)
+    out = subprocess.run(
+        [sys.executable, "-c", docs_robot_loop()], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    )
+    assert out.returncode == 0, out.stderr[-3000:]
+    limit = StandInRobot(ID, map=str(tmp_path / "my_office.json")).time_limit
+    assert out.stdout.strip().splitlines()[-1] == f"{limit} moves: the time limit"

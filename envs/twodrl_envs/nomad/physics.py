@@ -5,10 +5,13 @@ The office's rules (eq. 11-12, goal, route, spaces) are :mod:`twodrl_envs.nomad.
 
 * **scene**: each wall segment (obstacle edges included) a box 1 m high and 0.2 mm thick on a floor, which the
   sensors' rays hit; a horizontal capsule of radius :data:`SKIN_CM` along each segment is its contact skin;
-* **robot**: a 60 cm cylinder of :data:`MASS_KG` on two slide joints (a synchro drive translates and keeps the
-  heading north; no turning joint), driven by a velocity actuator per axis whose force limit caps the
-  acceleration; its contact cylinder is :data:`SKIN_CM` thinner than the body, so it touches a skin exactly
-  when its centre comes within 30 cm of the wall's segment: the lattice simulator's disc rule;
+* **robot**: the model file :data:`ROBOT_MJCF` (``robots/nomad200/``, its numbers and their sources in the
+  folder's README), included in the office's scene: a 60 cm cylinder of 60 kg on two slide joints (a synchro drive
+  translates and keeps the heading north; no turning joint), driven by a velocity actuator per axis whose force
+  limit caps the acceleration; its contact cylinder is :data:`SKIN_CM` thinner than the body, so it touches a skin
+  exactly when its centre comes within 30 cm of the wall's segment: the lattice simulator's disc rule. A site marks
+  each sensor's pose, and a MuJoCo ``rangefinder`` each IR beam (switched off in the env, which casts its own
+  rays: ``mjDSBL_SENSOR``);
 * **a move**: the velocity command for the time 10 cm takes at :data:`SPEED_CM_S`, then a stop command until the
   robot has settled; momentum and contact decide where it ends. A contact during the move is a collision: the
   move ends there and the robot stays outside the wall;
@@ -28,10 +31,17 @@ The office's rules (eq. 11-12, goal, route, spaces) are :mod:`twodrl_envs.nomad.
 
 Every draw is counter-based from (episode key, step) and MuJoCo is deterministic, so a seed gives one episode.
 ``mujoco`` is imported when a robot is built, not when :mod:`twodrl_envs` is.
+
+``render()`` (``render_mode="rgb_array"``) draws the MuJoCo scene from above with ``mujoco.Renderer``, offscreen
+(:class:`TopDownView`); ``render_mode="lattice_rgb_array"`` draws the lattice picture of the other Nomad IDs.
 """
 
 from __future__ import annotations
 
+import itertools
+import os
+import sys
+import warnings
 from functools import cached_property
 from pathlib import Path
 from typing import Any
@@ -46,36 +56,51 @@ from twodrl_envs.nomad.office import NomadOfficeEnv
 from twodrl_envs.nomad.realistic import RealisticModel
 from twodrl_envs.nomad.sensors import BEARINGS, N_SONAR, SONAR_HALF_ANGLE, SONAR_MAX_CM
 
-MASS_KG = 60.0
-"""The robot's mass (an assumption: a Nomad 200 with batteries and turret; the project has no data sheet)."""
+ROBOT_MJCF = Path(__file__).with_name("robots") / "nomad200" / "nomad200.xml"
+"""The robot's MuJoCo model (body, mass, drive, time step, sensor sites, IR rangefinders); the numbers and where
+they come from: the folder's README.md. ``scene.xml`` beside it puts the robot on a floor by a wall corner."""
 SPEED_CM_S = 25.0
 """Commanded speed of a move: half the Nomad 200's top speed (20 in/s), for 10 cm moves."""
-MAX_FORCE_N = 60.0
-"""Force limit of each drive axis: 1 m/s^2 at :data:`MASS_KG`, so the robot reaches its speed in 2.5 cm."""
-DRIVE_GAIN = 3000.0
-"""Velocity feedback gain of the actuators (N per m/s): a 20 ms time constant at :data:`MASS_KG`."""
-TIMESTEP_S = 0.005
 SETTLED_CM_S = 0.1
 """A move ends when the robot is slower than this after the stop command (or :data:`MAX_SETTLE_S` has passed)."""
 MAX_SETTLE_S = 1.0
 WALL_HEIGHT_CM = 100.0
 SENSOR_HEIGHT_CM = 60.0
+"""Height of both sensor rings (the model's sites, tested equal)."""
 SKIN_CM = 5.0
 """Radius of the walls' contact capsules; the robot's contact cylinder is this much thinner than its body."""
 CONE_RAYS = 9
 """Rays over each ideal sonar cone (both edges and the axis): at most 0.06% longer than the cone's nearest point
 on a wall seen across it."""
+PIXELS_PER_CM, MARGIN_PX = 1.5, 8
+"""Scale and margin of :meth:`NomadOfficeMuJoCoEnv.render`'s frames: the lattice picture's, so both are one size."""
+RENDER_MODES = ("rgb_array", "lattice_rgb_array")
+TRAIL = np.array([0.86, 0.24, 0.24, 1.0], dtype=np.float32)
+"""Colour of the robot's trail in :class:`TopDownView`'s frames (the lattice picture's)."""
 _CUTOFF_CM = 2000.0
 _HEADING_SALT = 0x2545F4914F6CDD1D
 MUJOCO_HINT = 'NomadOfficeMuJoCo-v0 needs the MuJoCo physics engine: pip install "sb3-twodrl[mujoco]"'
+GL_PACKAGES = "EGL: apt-get install libegl1 libgl1-mesa-dri; OSMesa: apt-get install libosmesa6"
+"""The Debian packages of MuJoCo's headless OpenGL back ends (``MUJOCO_GL=egl`` or ``osmesa``)."""
 
 
 def import_mujoco() -> Any:
-    """The ``mujoco`` module, or ``ModuleNotFoundError`` saying which extra installs it."""
+    """The ``mujoco`` module, or ``ModuleNotFoundError`` saying which extra installs it.
+
+    Imported first here on Linux without a display and without ``MUJOCO_GL``, it renders through EGL
+    (``MUJOCO_GL=egl``, headless); MuJoCo's default there, GLFW, needs a display."""
+    headless = sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+    if headless and "mujoco" not in sys.modules:
+        os.environ.setdefault("MUJOCO_GL", "egl")
     try:
         import mujoco
     except ImportError as err:
         raise ModuleNotFoundError(f"{MUJOCO_HINT} ({err})", name="mujoco") from err
+    except Exception as err:  # MUJOCO_GL names a back end whose library is missing: mujoco fails as it imports
+        raise ImportError(
+            f"mujoco cannot be imported with MUJOCO_GL={os.environ.get('MUJOCO_GL')!r} ({type(err).__name__}: {err}):"
+            f" install that OpenGL back end ({GL_PACKAGES}) or unset MUJOCO_GL"
+        ) from err
     return mujoco
 
 
@@ -84,7 +109,8 @@ def _m(cm: float) -> str:
 
 
 def office_mjcf(office: OfficeMap) -> str:
-    """The MJCF text of ``office``'s scene and robot (module docstring); lengths in metres, x east, y north."""
+    """The MJCF text of ``office``'s scene (module docstring), the robot included as ``nomad200.xml``
+    (:data:`ROBOT_MJCF`: :func:`office_model` compiles it); lengths in metres, x east, y north."""
     x0, y0, x1, y1 = office.bounds
     half_height = WALL_HEIGHT_CM / 2
     walls, skins = [], []
@@ -98,7 +124,7 @@ def office_mjcf(office: OfficeMap) -> str:
         z = _m(SENSOR_HEIGHT_CM / 2)
         skins.append(
             f'<geom name="skin{i}" type="capsule" group="3" conaffinity="1" size="{_m(SKIN_CM)}"'
-            f' fromto="{_m(ax)} {_m(ay)} {z} {_m(bx)} {_m(by)} {z}" rgba="1 0 0 0"/>'
+            f' fromto="{_m(ax)} {_m(ay)} {z} {_m(bx)} {_m(by)} {z}" rgba=".25 .25 .3 1"/>'
         )
     regions = []
     for name, rgba in zip(REGION_KEYS, (".2 .75 .3 .6", ".95 .75 .2 .35", ".3 .5 .95 .35"), strict=True):
@@ -110,7 +136,6 @@ def office_mjcf(office: OfficeMap) -> str:
             )
     return f"""<mujoco model="{office.name}">
   <compiler angle="radian"/>
-  <option timestep="{TIMESTEP_S}" integrator="implicitfast" gravity="0 0 0"/>
   <default><geom contype="0" conaffinity="0" friction="0.5 0.005 0.0001"/></default>
   <worldbody>
     <light pos="{_m((x0 + x1) / 2)} {_m((y0 + y1) / 2)} 5" dir="0 0 -1" directional="true"/>
@@ -119,21 +144,19 @@ def office_mjcf(office: OfficeMap) -> str:
     {"".join(regions)}
     {"".join(walls)}
     {"".join(skins)}
-    <body name="robot" pos="0 0 0">
-      <joint name="x" type="slide" axis="1 0 0"/>
-      <joint name="y" type="slide" axis="0 1 0"/>
-      <geom name="body" type="cylinder" group="1" contype="1" size="{_m(ROBOT_RADIUS_CM - SKIN_CM)} 0.4"
-        pos="0 0 0.4" mass="{MASS_KG}" rgba=".8 .2 .1 1"/>
-      <geom name="turret" type="cylinder" group="1" size="{_m(ROBOT_RADIUS_CM)} 0.01"
-        pos="0 0 {_m(SENSOR_HEIGHT_CM)}" mass="0" rgba=".2 .2 .2 1"/>
-    </body>
   </worldbody>
-  <actuator>
-    <velocity name="vx" joint="x" kv="{DRIVE_GAIN}" forcelimited="true" forcerange="-{MAX_FORCE_N} {MAX_FORCE_N}"/>
-    <velocity name="vy" joint="y" kv="{DRIVE_GAIN}" forcelimited="true" forcerange="-{MAX_FORCE_N} {MAX_FORCE_N}"/>
-  </actuator>
+  <include file="{ROBOT_MJCF.name}"/>
 </mujoco>
 """
+
+
+def office_model(office: OfficeMap) -> Any:
+    """The compiled ``mujoco.MjModel`` of :func:`office_mjcf`, the robot read from :data:`ROBOT_MJCF`; its
+    rangefinders switched off (``mjDSBL_SENSOR``: the env casts its own rays)."""
+    mujoco = import_mujoco()
+    model = mujoco.MjModel.from_xml_string(office_mjcf(office), {ROBOT_MJCF.name: ROBOT_MJCF.read_bytes()})
+    model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_SENSOR
+    return model
 
 
 def _fan(half_angle: float, rays: int) -> np.ndarray:
@@ -171,7 +194,7 @@ class MuJoCoRobot(Robot):
         self.heading_sd_rad = non_negative("heading_sd_rad", heading_sd_rad)
         mujoco = import_mujoco()
         self._mj = mujoco
-        self.mjmodel = mujoco.MjModel.from_xml_string(office_mjcf(core.office))
+        self.mjmodel = office_model(core.office)
         self.data = mujoco.MjData(self.mjmodel)
         mujoco.mj_forward(self.mjmodel, self.data)
         self._body = self.mjmodel.body("robot").id
@@ -179,8 +202,9 @@ class MuJoCoRobot(Robot):
         self._wall_of_geom = np.full(self.mjmodel.ngeom + 1, -1, dtype=np.intp)  # geom id -1 (no hit) -> -1
         self._wall_of_geom[first : first + len(core.office.walls)] = np.arange(len(core.office.walls))
         self._groups = np.array([1, 0, 0, 0, 0, 0], dtype=np.uint8)  # rays see the walls' boxes only
-        self._drive_steps = round(STEP_CM / SPEED_CM_S / TIMESTEP_S)
-        self._settle_steps = round(MAX_SETTLE_S / TIMESTEP_S)
+        timestep = float(self.mjmodel.opt.timestep)
+        self._drive_steps = round(STEP_CM / SPEED_CM_S / timestep)
+        self._settle_steps = round(MAX_SETTLE_S / timestep)
         self._xy = np.array(core.office.start, dtype=np.float64)
         self.contact = False
         self.odometry_cm = np.zeros(2)
@@ -356,14 +380,67 @@ class MuJoCoRobot(Robot):
         return sensors.normalise(np.array(rows).reshape(-1, sensors.N_READINGS))
 
 
+class TopDownView:
+    """The MuJoCo scene of a :class:`MuJoCoRobot` seen from above, offscreen (``mujoco.Renderer``): the office's
+    walls (their contact skins, which show from above), route regions and goal on the floor, the robot (its
+    turret, the sensor sites on its rim) where the physics has it, and its trail.
+
+    Needs an OpenGL context without a display (:func:`import_mujoco` picks ``MUJOCO_GL=egl``); where none can be
+    made, building the view raises MuJoCo's error.
+    """
+
+    def __init__(self, robot: MuJoCoRobot) -> None:
+        mujoco, model = robot._mj, robot.mjmodel
+        x0, y0, x1, y1 = robot.core.office.bounds
+        width, height = (round(span * PIXELS_PER_CM) + 2 * MARGIN_PX for span in (x1 - x0, y1 - y0))
+        model.vis.global_.offwidth = max(model.vis.global_.offwidth, width)
+        model.vis.global_.offheight = max(model.vis.global_.offheight, height)
+        model.vis.global_.fovy = height / PIXELS_PER_CM / 100.0  # orthographic: the view's height in metres
+        self.renderer = mujoco.Renderer(model, height, width)
+        self.camera = mujoco.MjvCamera()
+        self.camera.orthographic = 1
+        self.camera.lookat[:] = ((x0 + x1) / 200.0, (y0 + y1) / 200.0, 0.0)
+        self.camera.distance, self.camera.elevation, self.camera.azimuth = 10.0, -90.0, 90.0
+        self.option = mujoco.MjvOption()
+        self.option.geomgroup[3] = 1  # the walls' contact skins: a wall's box is 0.2 mm thin from above
+        self.option.flags[mujoco.mjtVisFlag.mjVIS_RANGEFINDER] = 0
+        self._mj, self._model, self._robot = mujoco, model, robot
+        self._data = mujoco.MjData(model)  # the robot's pose copied: rendering leaves the physics' state alone
+
+    def frame(self, trajectory: list[tuple[float, float]]) -> np.ndarray:
+        """An ``(H, W, 3)`` uint8 frame of the scene now, with ``trajectory`` (cm) as a trail on the floor."""
+        mujoco = self._mj
+        self._data.qpos[:] = self._robot.data.qpos
+        mujoco.mj_kinematics(self._model, self._data)
+        self.renderer.update_scene(self._data, self.camera, self.option)
+        scene = self.renderer.scene
+        points = np.asarray(trajectory, dtype=np.float64).reshape(-1, 2) / 100.0
+        for a, b in itertools.pairwise(points):
+            if scene.ngeom >= scene.maxgeom or np.array_equal(a, b):
+                continue
+            geom = scene.geoms[scene.ngeom]
+            mujoco.mjv_initGeom(geom, mujoco.mjtGeom.mjGEOM_CAPSULE, np.zeros(3), np.zeros(3), np.eye(3).ravel(), TRAIL)
+            mujoco.mjv_connector(geom, mujoco.mjtGeom.mjGEOM_CAPSULE, 0.008, (*a, 0.003), (*b, 0.003))
+            scene.ngeom += 1
+        return np.asarray(self.renderer.render())
+
+    def close(self) -> None:
+        self.renderer.close()
+
+
 class NomadOfficeMuJoCoEnv(NomadOfficeEnv):
     """``NomadOfficeMuJoCo-v0``: the office task on the MuJoCo robot (:class:`MuJoCoRobot`).
 
     Spaces, evaluations and ``info`` are ``NomadOffice-v0``'s; the true pose is the physics'; a move that
     touches a wall is a collision (the core's rule: the robot stays where it was, the episode ends); the
     odometry in the observation is the robot's dead reckoning from its measured motion.
+
+    ``render_mode="rgb_array"``: :meth:`render` draws the MuJoCo scene from above (:class:`TopDownView`);
+    ``render_mode="lattice_rgb_array"``: the lattice picture of the other Nomad IDs (walls, regions, trail, sonar
+    cones). Without an OpenGL context for MuJoCo, ``rgb_array`` draws the lattice picture and warns once.
     """
 
+    metadata = {"render_modes": list(RENDER_MODES), "render_fps": 10}
     robot: MuJoCoRobot
 
     def __init__(
@@ -379,9 +456,15 @@ class NomadOfficeMuJoCoEnv(NomadOfficeEnv):
         starts: str = "map",
         progress: float = 0.0,
     ) -> None:
+        if render_mode is not None and render_mode not in RENDER_MODES:
+            raise ValueError(f"render_mode must be None or one of {list(RENDER_MODES)}, got {render_mode!r}")
         core = office_core(map)
         robot = MuJoCoRobot(core, model, artifacts=artifacts, heading_sd_rad=heading_sd_rad)
-        self._setup(core, robot, observe_odometry, render_mode, observation, starts, progress)
+        trail = None if render_mode is None else "rgb_array"  # either mode: the episodes keep the trail
+        self._setup(core, robot, observe_odometry, trail, observation, starts, progress)
+        self.render_mode = render_mode
+        self._view: TopDownView | None = None
+        self._no_view = False
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -400,3 +483,31 @@ class NomadOfficeMuJoCoEnv(NomadOfficeEnv):
             if self.observe_odometry and isinstance(observation, np.ndarray):
                 observation[sensors.N_READINGS :] = self.core.odometry(self._odo)
         return observation, reward, terminated, truncated, info
+
+    def render(self) -> np.ndarray | None:
+        """The frame of :attr:`render_mode` (class docstring): the MuJoCo scene, or the lattice picture."""
+        if self.render_mode == "rgb_array" and not self._no_view:
+            if self._view is None:
+                try:
+                    self._view = TopDownView(self.robot)
+                except Exception as err:  # the GL back ends fail with different errors (import, GL, MuJoCo)
+                    self._no_view = True
+                    reason = f"{type(err).__name__}: {str(err).splitlines()[0] if str(err) else ''}"
+                    warnings.warn(
+                        f"NomadOfficeMuJoCo-v0 cannot render the MuJoCo scene (no OpenGL context, "
+                        f"MUJOCO_GL={os.environ.get('MUJOCO_GL', '')!r}: {reason}); drawing the lattice picture "
+                        f"instead; set MUJOCO_GL=egl or osmesa before mujoco is imported ({GL_PACKAGES})",
+                        RuntimeWarning,
+                        stacklevel=2,
+                    )
+            if self._view is not None:
+                return self._view.frame(self._trajectory)
+        if self.render_mode is None:
+            return None
+        return self.episodes.frame(self._pos, self._trajectory)
+
+    def close(self) -> None:
+        if self._view is not None:
+            self._view.close()
+            self._view = None
+        super().close()
