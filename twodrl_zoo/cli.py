@@ -26,6 +26,7 @@ __all__ = [
     "check_command_line",
     "enjoy",
     "export_line",
+    "has_screen",
     "replay_options",
     "report_goal_rate",
     "require_extra",
@@ -224,7 +225,7 @@ def enjoy(argv: list[str] | None = None) -> None:
     start and its time limit, not the training options), under what ``--env-kwargs`` gives.
     ``--record -o videos`` records a video instead (rl-zoo3's ``record_video``, needs ``moviepy``; the env must
     support ``render_mode="rgb_array"``). Without ``pygame`` it replays headless (``--no-render``) and says how to
-    get the window.
+    get the window; without a screen (:func:`has_screen`) it replays headless too and says so.
     """
     require_extra("zoo", *ZOO_MODULES)
     from twodrl_zoo.zoo import _has_option, prepare_zoo_argv, run_zoo_entry
@@ -252,9 +253,23 @@ def enjoy(argv: list[str] | None = None) -> None:
             file=sys.stderr,
         )
         argv.append("--no-render")
+    elif "--no-render" not in argv and not has_screen():
+        print(
+            "no screen (DISPLAY and WAYLAND_DISPLAY unset): replaying without a window (--no-render); "
+            "--record -o videos writes a video instead",
+            file=sys.stderr,
+        )
+        argv.append("--no-render")
     if not _has_option(argv, "--num-threads"):
         argv += ["--num-threads", "1"]
     run_zoo_entry("sb3-twodrl-enjoy", argv, zoo_enjoy)
+
+
+def has_screen() -> bool:
+    """Whether a window can open: not on Linux without ``DISPLAY`` or ``WAYLAND_DISPLAY`` (a server, CI, ssh)."""
+    import os
+
+    return not sys.platform.startswith("linux") or bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
 def replay_options(argv: list[str]) -> list[str]:

@@ -4,17 +4,16 @@ from __future__ import annotations
 
 import glob
 import os
-import runpy
 import subprocess
 import sys
-from importlib.metadata import EntryPoint
+from importlib.metadata import EntryPoint, entry_points
 from pathlib import Path
 
 import optuna
 import pytest
 import yaml
 
-import tests.toy_nav  # noqa: F401  (registers ToyNav-v0)
+import tests.helpers.toy_nav  # noqa: F401  (registers ToyNav-v0)
 import twodrl_envs  # noqa: F401  (registers the Nomad office ids)
 from twodrl_zoo import cli, export, zoo
 from twodrl_zoo.hyperparams import hyperparams_path
@@ -34,10 +33,11 @@ ZOO_ENVS = ["NomadOffice-v0", "NomadOfficeMemorable-v0", "CartPole-v1", "Acrobot
 ALGOS = ["a2c", "twoda2c", "ppo", "twodppo"]
 
 
-def run_script(name: str, argv: list[str], monkeypatch) -> None:
-    """``scripts/<name>`` as run from a checkout (it calls :mod:`twodrl_zoo.cli`, the installed commands)."""
+def run_command(name: str, argv: list[str], monkeypatch) -> None:
+    """The installed console command ``name`` (its ``console_scripts`` entry point) with ``argv``."""
+    (command,) = entry_points(group="console_scripts", name=name)
     monkeypatch.setattr(sys, "argv", [name, *argv])
-    runpy.run_path(str(ROOT / "scripts" / name), run_name="__main__")
+    command.load()()
 
 
 def toy_conf(tmp_path: Path, algo: str) -> Path:
@@ -99,11 +99,11 @@ def test_yaml_covers_the_envs_for_both_algorithms():
 @pytest.mark.parametrize("algo", ALGOS)
 def test_train_tiny_budget_leaves_model_and_tensorboard(algo, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    argv = ["--algo", algo, "--env", "ToyNav-v0", "--gym-packages", "tests.toy_nav"]
+    argv = ["--algo", algo, "--env", "ToyNav-v0", "--gym-packages", "tests.helpers.toy_nav"]
     argv += ["-conf", str(toy_conf(tmp_path, algo))]
     argv += ["-n", "200", "--eval-freq", "100", "--eval-episodes", "2", "--save-freq", "100", "--log-interval", "1"]
     argv += ["-tb", "tb", "-f", "logs", "--seed", "0", "--device", "cpu"]
-    run_script("train.py", argv, monkeypatch)
+    run_command("sb3-twodrl-train", argv, monkeypatch)
     model_path = tmp_path / "logs" / algo / "ToyNav-v0_1" / "ToyNav-v0.zip"
     assert model_path.is_file()
     assert list((tmp_path / "logs" / algo / "ToyNav-v0_1").glob("rl_model_*_steps.zip"))  # --save-freq
@@ -119,15 +119,15 @@ def test_train_tiny_budget_leaves_model_and_tensorboard(algo, tmp_path, monkeypa
     if algo.startswith("twod"):
         assert "train/interest" in tags
     # enjoy replays it (no rendering in tests)
-    run_script(
-        "enjoy.py",
-        ["--algo", algo, "--env", "ToyNav-v0", "--gym-packages", "tests.toy_nav", "-n", "20", "--no-render"],
+    run_command(
+        "sb3-twodrl-enjoy",
+        ["--algo", algo, "--env", "ToyNav-v0", "--gym-packages", "tests.helpers.toy_nav", "-n", "20", "--no-render"],
         monkeypatch,
     )
     if algo == "a2c":  # and records a video (rl-zoo3's record_video)
         pytest.importorskip("moviepy")
-        record = ["--algo", algo, "--env", "ToyNav-v0", "--gym-packages", "tests.toy_nav"]
-        run_script("enjoy.py", [*record, "--record", "-o", "videos", "-n", "10"], monkeypatch)
+        record = ["--algo", algo, "--env", "ToyNav-v0", "--gym-packages", "tests.helpers.toy_nav"]
+        run_command("sb3-twodrl-enjoy", [*record, "--record", "-o", "videos", "-n", "10"], monkeypatch)
         assert list((tmp_path / "videos").glob("*.mp4"))
 
 
@@ -137,7 +137,7 @@ def test_shipped_hyperparams_train(algo, env_id, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     argv = ["--algo", algo, "--env", env_id, "-n", "64", "--eval-freq", "-1"]
     argv += ["-f", "logs", "--seed", "1", "--device", "cpu"]
-    run_script("train.py", argv, monkeypatch)
+    run_command("sb3-twodrl-train", argv, monkeypatch)
     assert (tmp_path / "logs" / algo / f"{env_id}_1" / f"{env_id}.zip").is_file()
 
 
@@ -145,12 +145,12 @@ def test_shipped_hyperparams_train(algo, env_id, tmp_path, monkeypatch):
 def test_two_trial_optuna_study_with_shared_storage(algo, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     storage = str(tmp_path / "study.log")  # journal file: several machines can share it (or an RDB URL)
-    argv = ["--algo", algo, "--env", "ToyNav-v0", "--gym-packages", "tests.toy_nav"]
+    argv = ["--algo", algo, "--env", "ToyNav-v0", "--gym-packages", "tests.helpers.toy_nav"]
     argv += ["-conf", str(toy_conf(tmp_path, algo))]
     argv += ["-optimize", "--n-trials", "2", "-n", "100", "--n-evaluations", "1", "--eval-episodes", "2"]
     argv += ["--sampler", "random", "--pruner", "none", "--no-optim-plots", "--storage", storage]
     argv += ["--study-name", "zoo-test", "-f", "logs", "--seed", "0", "--device", "cpu"]
-    run_script("train.py", argv, monkeypatch)
+    run_command("sb3-twodrl-train", argv, monkeypatch)
     journal = optuna.storages.JournalStorage(optuna.storages.journal.JournalFileBackend(storage))
     study = optuna.load_study(study_name="zoo-test", storage=journal)
     assert len(study.trials) == 2
@@ -230,7 +230,7 @@ def test_enjoy_without_pygame_replays_headless_and_names_the_extra(tmp_path, mon
         "--seed",
         "1",
     ]
-    run_script("train.py", [*argv, "--device", "cpu"], monkeypatch)
+    run_command("sb3-twodrl-train", [*argv, "--device", "cpu"], monkeypatch)
     code = (
         "import sys; sys.modules['pygame'] = None\n"  # import pygame raises ImportError, as when not installed
         "from twodrl_zoo import cli; cli.enjoy(['--algo', 'twoda2c', '--env', 'NomadOffice-v0', '-n', '20'])"
@@ -277,3 +277,18 @@ def test_train_defaults_to_the_packaged_file_and_one_thread(argv, added, monkeyp
     monkeypatch.setattr(twodrl_zoo.zoo, "run_zoo_entry", lambda prog, argv, entry: seen.append(argv))
     cli.train(argv)
     assert seen == [[*argv, *added]]
+
+
+def test_enjoy_without_a_screen_replays_headless_and_says_so(tmp_path, monkeypatch) -> None:
+    """The README's replay line on a server (no DISPLAY): no window, no pygame warnings, a line saying why."""
+    pytest.importorskip("pygame")
+    monkeypatch.chdir(tmp_path)
+    argv = ["--algo", "twoda2c", "--env", "NomadOffice-v0", "-n", "64", "--eval-freq", "-1", "--seed", "1"]
+    run_command("sb3-twodrl-train", [*argv, "--device", "cpu"], monkeypatch)
+    code = "from twodrl_zoo import cli; cli.enjoy(['--algo', 'twoda2c', '--env', 'NomadOffice-v0', '-n', '20'])"
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY", "XDG_RUNTIME_DIR")}
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert "no screen (DISPLAY and WAYLAND_DISPLAY unset): replaying without a window (--no-render)" in done.stderr
+    assert "XDG_RUNTIME_DIR" not in done.stderr and "Mean reward" in done.stdout
