@@ -182,10 +182,12 @@ def _check_limits(where: str, ring: Ring, low: float, high: float) -> None:
     if abs(low - model_low) <= tolerance and abs(high - model_high) <= tolerance:  # NaN or inf fail too
         return
     declared = f"{where} declares min_range {low:g}, max_range {high:g}"
-    if high > 10 * model_high:
-        raise ValueError(f"{declared}: {CENTIMETRES} (a {ring.what} reads {model_low:g}-{model_high:g} m)")
+    if abs(high / 100 - model_high) <= tolerance:
+        raise ValueError(
+            f"{declared}: {CENTIMETRES} (the sensor model's {ring.what} reads {model_low:g}-{model_high:g} m)"
+        )
     raise ValueError(
-        f"{declared}; a {ring.what} of the sensor model reads {model_low:g}-{model_high:g} m (within {tolerance:g} m): "
+        f"{declared}; the sensor model's {ring.what} reads {model_low:g}-{model_high:g} m (within {tolerance:g} m): "
         f"is it the {ring.what} ring? ({ring.flags})"
     )
 
@@ -276,7 +278,9 @@ def read_bag(
         if (topic is not None or what == "odometry") and (not isinstance(topic, str) or not topic.startswith("/")):
             raise ValueError(f"{what} topic must be a topic name starting with '/', got {topic!r}")
     pose_topic = odometry if pose is None else pose
-    pose_flags = "--odom-topic / odometry=" if pose is None else "--pose-topic / pose="
+    pose_flags = (
+        "--odom-topic / odometry=, or a pose topic: --pose-topic / pose=" if pose is None else "--pose-topic / pose="
+    )
     rosbags = import_rosbags()
     path = Path(path)
     name = str(path)

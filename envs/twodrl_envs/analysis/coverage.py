@@ -83,8 +83,10 @@ def plot_coverage(db: SensorDatabase, core: OfficeCore, path: str | Path) -> Pat
     for xa, ya, xb, yb in office.walls:
         ax.plot([xa, xb], [ya, yb], color="black", linewidth=1.5)
     shown = counts > 0
-    dots = ax.scatter(*cells[shown].T, c=counts[shown], s=9, marker="s", cmap="viridis", vmin=0)
-    ax.scatter(*cells[missing].T, color="red", s=14, marker="x", label=f"no readings ({int(missing.sum())})")
+    dots = ax.scatter(cells[shown, 0], cells[shown, 1], c=counts[shown], s=9, marker="s", cmap="viridis", vmin=0)
+    ax.scatter(
+        cells[missing, 0], cells[missing, 1], color="red", s=14, marker="x", label=f"no readings ({int(missing.sum())})"
+    )
     ax.plot(*office.start, marker="*", color="orange", markersize=12, linestyle="", label="start")
     fig.colorbar(dots, ax=ax, label="readings per cell", shrink=0.8)
     ax.set_aspect("equal")
