@@ -12,7 +12,8 @@ at each (``sb3-twodrl-survey``; extra ``sb3-twodrl[ros]``, and ``sb3-twodrl[mujo
   there. The simulation's localiser is exact: the localised pose is the true pose. The robot stops ``k`` times at
   each cell the first time it is localised there (``k`` readings at one pose, each with its own noise draws). A
   move that touches a wall is a bump (the robot stays where it was, as in the envs) and the next try takes
-  another way; a cell not reached after :data:`MAX_TRIES` moves is left out (counted).
+  another way; a cell of the route not reached after :data:`MAX_TRIES` moves is skipped (counted; a later pass
+  may still survey it).
 * **the odometry**: the robot's own dead reckoning, drift included (the MuJoCo robot's measured motion misread by
   the model's motion error; the artifact model's commanded moves while its true motion drifts): over a survey it
   drifts far more than over an episode, which is why the bag also holds the localised pose and the import files
@@ -74,7 +75,7 @@ MOVE_S = 0.5
 READING_S = 0.25
 """The bag's clock per reading (the 16 sonars and 16 IR sensors each once)."""
 MAX_TRIES = 50
-"""Moves the drive spends on one cell of the route before it leaves the cell out."""
+"""Moves the drive spends on one cell of the route before it skips it."""
 LOCALISED_TOPIC = "/amcl_pose"
 """The localised pose (``geometry_msgs/msg/PoseWithCovarianceStamped`` in the map's frame), as AMCL publishes it."""
 LOCALISED = "geometry_msgs/msg/PoseWithCovarianceStamped"
@@ -164,7 +165,7 @@ class Survey:
     ``(p, 2)`` (the localised pose: the simulation's localiser is exact) and the odometry ``odometry_cm``
     ``(p, 2)``; ``readings``: ``ranges_cm`` ``(n, 32)`` as the robot reports them, taken at bag time
     ``reading_s`` ``(n,)`` at pose ``pose_of`` ``(n,)`` (an index into the poses) and filed under ``cell``
-    ``(n,)``; ``route`` the planned cells.
+    ``(n,)``; ``route`` the planned cells; ``skipped`` the route cells given up (:data:`MAX_TRIES`).
     """
 
     map: str
@@ -181,7 +182,7 @@ class Survey:
     cell: np.ndarray
     moves: int
     bumps: int
-    left_out: int
+    skipped: int
 
     @property
     def cells(self) -> int:
@@ -240,7 +241,7 @@ def drive_survey(
     ranges: list[np.ndarray] = []
     filed: list[int] = []
     surveyed = np.zeros(len(lattice.cells), dtype=bool)
-    moves = bumps = left_out = 0
+    moves = bumps = skipped = 0
     span = sensors.HIGH_CM - sensors.LOW_CM
 
     def stop(cell: int) -> None:
@@ -264,14 +265,14 @@ def drive_survey(
         tries, banned = 0, set[int]()
         while here != goal:
             if tries == MAX_TRIES:
-                left_out += 1
+                skipped += 1
                 break
             tries += 1
             try:
                 action = _path(lattice, here, goal.__eq__, banned)[0]
-            except LookupError:
-                left_out += 1
-                break
+            except LookupError:  # every way out bumped: try them again (the robot's next moves differ)
+                banned.clear()
+                continue
             step += 1
             if physics:
                 bot.place(truth)  # type: ignore[attr-defined]
@@ -309,7 +310,7 @@ def drive_survey(
         np.array(filed, dtype=np.int64),
         moves,
         bumps,
-        left_out,
+        skipped,
     )
 
 
@@ -497,7 +498,7 @@ def main(argv: list[str] | None = None) -> None:
     )
     print(
         f"sb3-twodrl-survey: {survey.cells} of {total} cells, {len(survey.ranges_cm)} readings ({survey.k} per cell), "
-        f"{survey.moves} moves ({survey.bumps} bumps, {survey.left_out} cells left out), "
+        f"{survey.moves} moves ({survey.bumps} bumps, {survey.skipped} waypoints skipped), "
         f"{survey.pose_s[-1] / 60:.0f} min of robot time; {time.monotonic() - began:.0f} s (drive "
         f"{driven - began:.0f} s); wrote {args.out} ({_size(args.out) / 1e6:.1f} MB, {args.storage})"
     )
