@@ -223,6 +223,7 @@ def main(argv: list[str] | None = None) -> None:
     k = 8 if args.k is None else args.k
     if args.from_csv is not None or args.from_bag is not None:
         flag = "--from-csv" if args.from_csv is not None else "--from-bag"
+        log = args.from_csv or args.from_bag
         try:  # one line: what is wrong with the log, or what to install
             db = _import(args)
             report = coverage(db, core)
@@ -230,15 +231,15 @@ def main(argv: list[str] | None = None) -> None:
             picture = "" if args.coverage_png is None else f" (drawn: {plot_coverage(db, core, args.coverage_png)})"
             if len(report.missing_cm) and not args.allow_missing:
                 raise ValueError(
-                    f"{len(report.missing_cm)} of {report.reachable} reachable cells have no readings (e.g. "
-                    f"{report.missing_examples()}){picture}; drive there and import again, or pass --allow-missing "
-                    "(cells without readings then count as obstacles)"
+                    f"{log}: {len(report.missing_cm)} of {report.reachable} reachable cells have no readings "
+                    f"(e.g. {report.missing_examples()}){picture}; drive there and import again, or pass "
+                    "--allow-missing (cells without readings then count as obstacles)"
                 )
-            db.check_map(core, source=str(args.from_csv or args.from_bag))
+            db.check_map(core, source=str(log))
         except (ValueError, ModuleNotFoundError) as err:
             parser.exit(2, f"{parser.prog}: error: {flag}: {err}\n")
     elif args.model == "realistic":
-        db = record_database(k, map=args.map, model=RealisticModel(), seed=args.seed)
+        db = record_database(k, map=args.map, model=RealisticModel(), seed=args.seed, progress=True)
     else:
         noise = NoiseModel() if args.model == "noise" else None
         db = record_database(k, map=args.map, noise=noise, seed=args.seed, progress=True)
