@@ -97,7 +97,11 @@ def plot_coverage(db: SensorDatabase, core: OfficeCore, path: str | Path) -> Pat
         "reachable cells have readings",
         fontsize=9,
     )
-    ax.legend(loc="upper right", fontsize=7)
+    gx0, gy0, gx1, gy1 = office.regions["goal"]
+    ax.add_patch(
+        plt.Rectangle((gx0, gy0), gx1 - gx0, gy1 - gy0, fill=False, color="green", linestyle="--", label="goal")
+    )
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=3, fontsize=7, frameon=False)
     path = Path(path)
     fig.savefig(path, bbox_inches="tight")
     plt.close(fig)
