@@ -44,8 +44,18 @@ def policies(tmp_path_factory) -> tuple[TwoDimA2C, dict[str, Path]]:
         "onnx": export_onnx(model, folder / "policy.onnx", input_stage=stage),
         "torchscript": export_policy(model, folder / "policy.pt", input_stage=stage),
         "no-stage": export_policy(model, folder / "plain.pt"),
+        "other-stage": export_policy(model, folder / "other.pt", input_stage=TenValues()),
     }
     return model, paths
+
+
+class TenValues(th.nn.Module):
+    """An input stage that takes 10 values, not the robot's 32 ranges and odometry."""
+
+    input_shape = (10,)
+
+    def forward(self, raw: th.Tensor) -> th.Tensor:
+        return raw.float().repeat(1, 4)[:, :34]
 
 
 @pytest.fixture(scope="module")
@@ -95,6 +105,18 @@ def test_the_replayed_moves_are_the_models_on_the_envs_observations(tmp_path: Pa
     assert copied == _messages(bag)  # every input message, its time and bytes unchanged
 
 
+def test_a_policy_without_odometry_gets_the_ranges_alone(tmp_path: Path, drive, bag) -> None:
+    th.manual_seed(1)
+    env = gym.make("twodrl_envs:NomadOffice-v0", map=MAP, observe_odometry=False)
+    model = TwoDimA2C("MlpPolicy", env, seed=1, device="cpu")
+    stage = deploy_input("NomadOffice-v0", {"map": MAP, "observe_odometry": False})
+    policy = export_policy(model, tmp_path / "ranges.pt", input_stage=stage)
+    replay_bag(bag, policy, tmp_path / "out", map=MAP, **SCANS)
+    observations = np.stack([env.reset(options={"position": tuple(xy)})[0] for xy in drive[0]])
+    expected, _ = model.predict(observations, deterministic=True)
+    assert [m.data for _, m in _decoded(tmp_path / "out", "/policy/action")] == [MOVES[a] for a in expected]
+
+
 @pytest.mark.parametrize("frame", ["start", "map"])
 def test_the_arrows_point_along_the_moves_in_the_pose_frame(tmp_path: Path, policies, drive, bag, frame) -> None:
     _, paths = policies
@@ -137,6 +159,7 @@ def test_the_command_prints_a_summary_and_refuses_to_overwrite(tmp_path: Path, p
         ("no-policy", r"POLICY: policy '\S+missing\.onnx' does not exist"),
         ("wrong-format", r"POLICY: policy '\S+policy\.zip': unknown format, expected a file ending in \.onnx"),
         ("no-stage", r"POLICY: policy '\S+plain\.pt' takes the env's observations .* --input-stage ENV_ID"),
+        ("other-stage", r"POLICY: policy '\S+other\.pt' takes input 'float32 \(n, 10\)', expected the robot's 32"),
         ("not-a-policy", r"POLICY: policy '\S+junk\.onnx' cannot be loaded as onnx"),
         ("out-exists", r"--out: out '\S+taken' exists; pass overwrite \(--overwrite\)"),
         ("out-not-a-bag", r"--out: out '\S+taken' exists and is no ROS 2 bag"),
@@ -153,8 +176,8 @@ def test_bad_arguments_are_one_line_errors(tmp_path: Path, policies, bag, capsys
     elif case == "wrong-format":
         policy = str(tmp_path / "policy.zip")
         Path(policy).write_bytes(b"")
-    elif case == "no-stage":
-        policy = str(paths["no-stage"])
+    elif case in ("no-stage", "other-stage"):
+        policy = str(paths[case])
     elif case == "not-a-policy":
         policy = str(tmp_path / "junk.onnx")
         Path(policy).write_text("no graph\n")
