@@ -140,7 +140,7 @@ def _load_torchscript(path: Path) -> tuple[Any, dict[str, Any] | None]:
     return module.eval(), json.loads(extra["meta.json"]) if extra["meta.json"] else None
 
 
-def reading_stamps(path: Path, sonar: str, ir: str, pose: str) -> tuple[list[int], list[tuple[str, float, float]]]:
+def _reading_stamps(path: Path, sonar: str, ir: str, pose: str) -> tuple[list[int], list[tuple[str, float, float]]]:
     """The bag time (ns) of each reading :func:`~twodrl_envs.analysis.bags.read_bag` gives (the message that completed
     it) and the pose it was taken at, as the pose topic says it: ``(frame_id, x, y)`` in metres."""
     rosbags = import_rosbags()
@@ -263,7 +263,7 @@ def replay_bag(
     actions = exported.act(raw)
     if actions.shape != (len(raw),) or not np.isin(actions, range(len(MOVES))).all():
         raise ValueError(f"policy {str(exported.path)!r} gave actions outside 0-3 (or of shape {actions.shape})")
-    stamps, poses = reading_stamps(bag, sonar, ir, odometry if pose is None else pose)
+    stamps, poses = _reading_stamps(bag, sonar, ir, odometry if pose is None else pose)
     if len(stamps) != len(actions):  # the rule of a reading is read_bag's; a difference is a bug here
         raise RuntimeError(f"replay found {len(stamps)} readings in {bag}, read_bag {len(actions)}")
     partial = out.parent / f".{out.name}.partial"
