@@ -24,6 +24,7 @@ round trip). ``rosbags`` (pure Python, no ROS installation) is imported when a b
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -166,7 +167,8 @@ def _from_map(xy_cm: np.ndarray, pose_frame: str, start: tuple[float, float]) ->
     return np.stack([xy_cm[..., 1] - start[1], start[0] - xy_cm[..., 0]], axis=-1) / 100.0
 
 
-def _saturate(values_m: np.ndarray, low: float, high: float) -> np.ndarray:
+def _saturate(values_m: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """Ranges (metres, ``(n, 32)``) as the database's cm: +-inf and beyond the sensor model's limits saturated."""
     cm = np.asarray(values_m, dtype=np.float64) * 100.0
     cm = np.where(np.isposinf(cm), high, np.where(np.isneginf(cm), low, cm))
     return np.clip(cm, low, high)
@@ -210,9 +212,12 @@ def scan_columns(where: str, angle_min: float, increment: float, count: int) -> 
     return (round(first) + int(np.sign(increment)) * np.arange(N_SONAR)) % N_SONAR
 
 
-def message_ranges(where: str, ring: Ring, index: int, msgtype: str, msg: Any) -> tuple[np.ndarray, np.ndarray]:
-    """The columns (of the 32) and ranges (cm, saturated) of one ring message, once what it says about itself is
-    checked: frame id, radiation type, declared ranges, scan layout, each range (NaN, negative, beyond max_range)."""
+def message_ranges(
+    where: str, ring: Ring, index: int, msgtype: str, msg: Any
+) -> tuple[int, float] | tuple[np.ndarray, np.ndarray]:
+    """The column(s) (of the 32) and range(s) (metres, as sent) of one ring message, once what it says about itself
+    is checked: frame id, radiation type, declared ranges, scan layout, each range (NaN, negative, beyond max_range).
+    A ``Range`` is read as a float (a bag holds hundreds of thousands)."""
     frame = msg.header.frame_id
     if frame != ring.frames[index]:
         raise ValueError(
@@ -227,13 +232,21 @@ def message_ranges(where: str, ring: Ring, index: int, msgtype: str, msg: Any) -
                 f"({RADIATION[ring.radiation]}) for the {ring.what} ring ({ring.flags})"
             )
         low, high = float(msg.min_range), float(msg.max_range)
-        values = np.array([msg.range], dtype=np.float64)
-        columns = np.array([index])
-    else:
-        low, high = float(msg.range_min), float(msg.range_max)
-        values = np.asarray(msg.ranges, dtype=np.float64)
-        columns = scan_columns(where, float(msg.angle_min), float(msg.angle_increment), len(values))
+        _check_limits(where, ring, low, high)
+        value = float(msg.range)
+        if not (math.isinf(value) or 0 <= value <= high * (1 + 1e-6)):  # NaN too
+            _check_values(where, ring, np.array([value]), high)
+        return ring.first + index, value
+    low, high = float(msg.range_min), float(msg.range_max)
+    values = np.asarray(msg.ranges, dtype=np.float64)
+    columns = scan_columns(where, float(msg.angle_min), float(msg.angle_increment), len(values))
     _check_limits(where, ring, low, high)
+    _check_values(where, ring, values, high)
+    return ring.first + columns, values
+
+
+def _check_values(where: str, ring: Ring, values: np.ndarray, high: float) -> None:
+    """Each range (metres) a number from 0 to ``high`` (the declared max_range), or +-inf (REP 117)."""
     if np.isnan(values).any():
         raise ValueError(f"{where} has a NaN range")
     finite = values[np.isfinite(values)]
@@ -244,7 +257,6 @@ def message_ranges(where: str, ring: Ring, index: int, msgtype: str, msg: Any) -
         if finite.max() > 10 * ring.range_m[1]:
             raise ValueError(f"{worst}: {CENTIMETRES}")
         raise ValueError(f"{worst} (no echo within max_range is +inf, REP 117)")
-    return ring.first + columns, _saturate(values, LOW_CM[ring.first], HIGH_CM[ring.first])
 
 
 def _position(msg: Any) -> np.ndarray:
@@ -350,7 +362,7 @@ def read_bag(
             f"bag {name}: no complete reading (every one of the 32 sensors after a pose on {pose_topic!r})"
         )
     stats = {"readings": len(readings), "readings_before_first_pose": before_pose, "poses": poses}
-    return np.array(positions), np.array(readings), stats
+    return np.array(positions), _saturate(np.array(readings), LOW_CM, HIGH_CM), stats
 
 
 def import_bag(
