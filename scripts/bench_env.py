@@ -14,12 +14,7 @@
 from __future__ import annotations
 
 import argparse
-import sys
 import time
-from pathlib import Path
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this checkout's envs, also when another is installed
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "envs"))  # the env package, envs/twodrl_envs/
 
 import gymnasium as gym
 import numpy as np

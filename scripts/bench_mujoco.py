@@ -9,11 +9,7 @@ Both single envs are driven by the same loop under the same random actions, rese
 from __future__ import annotations
 
 import argparse
-import sys
 import time
-from pathlib import Path
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "envs"))  # this checkout's envs
 
 import gymnasium as gym
 import numpy as np

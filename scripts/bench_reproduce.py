@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Throughput of the paper's protocol, both arms measured side by side in one run (targets: docs/benchmarks.md).
+"""Throughput of the paper's protocol, both arms measured side by side in one run (targets: docs/speed.md).
 
 For each n_envs: one (algo, seed) run per arm (``a2c`` is SB3's A2C on the experiments' fast path,
 :mod:`twodrl_bench.algorithms.baselines`) of ``--epochs`` paper-sized epochs (K learning
@@ -17,20 +17,15 @@ from __future__ import annotations
 
 import argparse
 import statistics
-import sys
 import tempfile
 import time
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))  # run from a checkout without installing
+import gymnasium as gym
+import torch as th
 
-import gymnasium as gym  # noqa: E402
-import torch as th  # noqa: E402
-
-import twodrl_envs  # noqa: E402, F401  (registers the IDs)
-from twodrl_bench import Experiment, load_spec  # noqa: E402
-from twodrl_bench.epochs import train  # noqa: E402
+import twodrl_envs  # noqa: F401  (registers the IDs)
+from twodrl_bench import Experiment, load_spec
+from twodrl_bench.epochs import train
 
 PAPER = "paper_preset/NomadOffice-v0"
 """The spec whose protocol the projection is for (1000 epochs of K = 1000, M = 100, 5 seeds)."""

@@ -11,11 +11,6 @@ wall-avoiding walks' goal rates by route for other time limits. Takes a few seco
 from __future__ import annotations
 
 import argparse
-import sys
-from pathlib import Path
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from a checkout without installing
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "envs"))  # the env package, envs/twodrl_envs/
 
 from twodrl_envs import MAX_EPISODE_STEPS
 from twodrl_envs.analysis.dilemma import goal_probabilities, measure, properties, wall_avoiding_policy

@@ -9,7 +9,7 @@ import numpy as np
 from gymnasium.wrappers import TimeLimit
 from stable_baselines3.common.vec_env import DummyVecEnv
 
-from tests.toy_envs import LatticeCorridor, TwoStateChain
+from tests.helpers.toy_envs import LatticeCorridor, TwoStateChain
 from twodrl_zoo.evaluation import goal_rate, run_episodes
 
 

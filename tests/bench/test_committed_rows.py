@@ -18,7 +18,7 @@ import pytest
 import torch
 import yaml
 
-from tests.recording_cpu import RECORDING_KERNELS, WHY
+from tests.helpers.recording_cpu import RECORDING_KERNELS, WHY
 
 ROOT = Path(__file__).resolve().parents[2]
 COMMITTED = ROOT / "results" / "quick_preset" / "rows.csv"

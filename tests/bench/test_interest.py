@@ -1,4 +1,4 @@
-"""The interest modes of ``sb3_twodrl.interest``: what each one's temperature means (eq. 2, 9)."""
+"""The interest modes of ``sb3_twodrl.common.interest``: what each one's temperature means (eq. 2, 9)."""
 
 from typing import Any
 
@@ -10,7 +10,7 @@ from gymnasium.wrappers import TimeLimit
 from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_twodrl import TwoDimA2C
-from tests.toy_envs import LatticeCorridor
+from tests.helpers.toy_envs import LatticeCorridor
 from twodrl_bench.algorithms.variants import INTEREST_MODES, VariantTwoDimA2C, scored_actions
 
 WEST = 3  # LatticeCorridor's move into the wall at the start
@@ -137,7 +137,7 @@ def collapsed_model(lead: float = 30.0, **kwargs: Any) -> TwoDimA2C:
     ],
 )
 def test_recovery_from_a_collapsed_actor(lead: float, kwargs: dict, outcome: str) -> None:
-    """After 20k steps from an actor collapsed onto the wall (``tests/collapse_probe.py``,
+    """After 20k steps from an actor collapsed onto the wall (``tests/helpers/collapse_probe.py``,
     seed 0), the greedy policy: the default comes back from a moderate lead (5, with the protocol's
     entropy bonus) but not from the hard one (30: the alternatives at ~exp(-60) get no gradient);
     bounded preferences come back from that too."""

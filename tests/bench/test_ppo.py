@@ -7,7 +7,7 @@ from stable_baselines3 import PPO
 from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_twodrl import TwoDimPPO
-from tests.toy_envs import ScriptedFeedbackEnv
+from tests.helpers.toy_envs import ScriptedFeedbackEnv
 from twodrl_bench.algorithms.variants import VariantTwoDimPPO, scored_actions
 
 PPO_ARGS = dict(n_steps=32, batch_size=16, n_epochs=4, clip_range_vf=0.2, gae_lambda=0.9, ent_coef=0.01, device="cpu")

@@ -22,7 +22,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from tests.toy_study import toy_settings, toy_spec
+from tests.helpers.toy_study import toy_settings, toy_spec
 from twodrl_bench.runner import run_study
 
 ray = pytest.importorskip("ray", reason="Ray is absent (extra 'cluster')")

@@ -10,7 +10,7 @@ import yaml
 
 pytest.importorskip("matplotlib")
 
-from tests.toy_study import toy_settings, toy_spec
+from tests.helpers.toy_study import toy_settings, toy_spec
 from twodrl_bench import algo_class
 from twodrl_bench.reports import report_study
 from twodrl_bench.runner import run_study

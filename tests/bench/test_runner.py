@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from tests.toy_study import toy_settings, toy_spec, write_spec
+from tests.helpers.toy_study import toy_settings, toy_spec, write_spec
 from twodrl_bench import cli
 from twodrl_bench.backends import run_jobs
 from twodrl_bench.experiment import Experiment
@@ -217,7 +217,7 @@ def test_the_command_runs_reports_and_shows_status(tmp_path, settings, capsys) -
 
 def test_a_report_by_module_path_taking_records_and_specs(tmp_path, settings, capsys) -> None:
     spec = toy_spec(settings, seeds=[0], protocol={"epochs": 2, "learn_episodes": 4, "test_episodes": 2})
-    run_study({**spec, "report": "tests.toy_records_report"}, tmp_path, "serial")
+    run_study({**spec, "report": "tests.helpers.toy_records_report"}, tmp_path, "serial")
     assert "4 rows of ['toy'], arms ['a2c', 'twoda2c']" in capsys.readouterr().out
     assert (tmp_path / "table.md").read_text() == "4 rows of ['toy'], arms ['a2c', 'twoda2c']\n"
 

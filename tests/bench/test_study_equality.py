@@ -4,7 +4,7 @@ That grid's rows are made here, on the same machine, by what it ran for each (al
 training (:func:`twodrl_bench.epochs.train`, the function that grid's ``run_pair`` became) on the settings
 01db862's ``specs_from_args`` built (the env's entry of ``<algo>.yml`` read as written, ``--n-envs`` over
 it). A committed CSV would not do: rows differ bitwise between machines. The same
-comparison against that commit's command itself (``scripts/reproduce.py`` there) on
+comparison against that commit's command itself (``01db862:scripts/reproduce.py``) on
 ``NomadOfficeMemorable-v0`` is in ``docs/studies.md``.
 """
 
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import pandas as pd
 
-from tests.toy_study import ALGOS, ENV, toy_settings, toy_spec
+from tests.helpers.toy_study import ALGOS, ENV, toy_settings, toy_spec
 from twodrl_bench.epochs import train
 from twodrl_bench.experiment import Experiment
 from twodrl_bench.runner import run_study
@@ -25,7 +25,13 @@ def old_rows(settings, out) -> pd.DataFrame:
     for algo in ALGOS:
         arm = {"algo": algo, "settings": str(settings), "override": {"n_envs": 2}}
         protocol = {"epochs": 3, "learn_episodes": 8, "test_episodes": 4}
-        spec = {"name": algo, "env": ENV, "gym_packages": ["tests.toy_nav"], "protocol": protocol, "seeds": [SEED]}
+        spec = {
+            "name": algo,
+            "env": ENV,
+            "gym_packages": ["tests.helpers.toy_nav"],
+            "protocol": protocol,
+            "seeds": [SEED],
+        }
         (job,) = Experiment.from_spec({**spec, "arms": {algo: arm}, "report": "paper"}).jobs(out)
         rows += train(job)
     return pd.DataFrame(rows)

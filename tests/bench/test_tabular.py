@@ -3,7 +3,7 @@
 
 Each run records the state, the action SB3 drew, the probabilities it drew it from and the
 evaluations of every step, and the network's tables after every update; the numpy oracle
-(``tests/tabular_oracle.py``) replays the same actions and must give the same probabilities
+(``tests/helpers/tabular_oracle.py``) replays the same actions and must give the same probabilities
 before each step and the same tables after it.
 """
 
@@ -21,7 +21,7 @@ from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import DummyVecEnv
 
 import twodrl_envs  # noqa: F401  (registers the IDs)
-from tests.tabular_oracle import TabularActorCritic
+from tests.helpers.tabular_oracle import TabularActorCritic
 from twodrl_bench.algorithms.variants import VariantTwoDimA2C
 from twodrl_envs.nomad.core import GOAL_REWARD
 

@@ -10,7 +10,7 @@ from gymnasium.wrappers import TimeLimit
 from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_twodrl import TwoDimA2C
-from tests.toy_envs import LatticeCorridor
+from tests.helpers.toy_envs import LatticeCorridor
 from twodrl_bench.algorithms.variants import VariantTwoDimA2C
 
 

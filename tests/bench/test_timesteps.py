@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import yaml
 
-from tests.recording_cpu import RECORDING_KERNELS, WHY
+from tests.helpers.recording_cpu import RECORDING_KERNELS, WHY
 
 pytest.importorskip("rl_zoo3")
 

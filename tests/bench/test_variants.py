@@ -11,8 +11,8 @@ from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
 from sb3_twodrl.common.policies import TEMPERATURE_ARGUMENTS
+from tests.helpers.toy_envs import LatticeCorridor
 from tests.library.test_sb3_contract import policy_save_load
-from tests.toy_envs import LatticeCorridor
 from twodrl_bench.algorithms import algo_class
 from twodrl_bench.algorithms.variants import (
     VARIANT_ARGUMENTS,

@@ -14,7 +14,7 @@ import torch as th
 from stable_baselines3 import A2C
 
 import twodrl_envs  # noqa: F401
-from tests.cloned_policy import cloned_model
+from tests.helpers.cloned_policy import cloned_model
 from twodrl_envs.nomad.core import office_core
 from twodrl_envs.nomad.deploy import RawObservation
 from twodrl_envs.nomad.drive import StandInRobot

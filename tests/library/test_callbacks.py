@@ -18,7 +18,7 @@ from sb3_twodrl.callbacks import (
     StopAfterEpisodes,
     summarize_episodes,
 )
-from tests.toy_nav import SCRIPT, ToyNavEnv, expected_episode
+from tests.helpers.toy_nav import SCRIPT, ToyNavEnv, expected_episode
 
 KEYS = ["goal_rate", "reward_per_step", "shortcut_share", "detour_share", "collision_rate"]
 

@@ -6,7 +6,7 @@ from gymnasium.wrappers import TimeLimit
 from stable_baselines3.common.env_util import make_vec_env
 
 from sb3_twodrl import TwoDimA2C
-from tests.toy_envs import TwoStateChain
+from tests.helpers.toy_envs import TwoStateChain
 
 GAMMA_R, GAMMA_P = 0.9, 0.5
 

@@ -7,7 +7,7 @@ from stable_baselines3.common.utils import explained_variance
 from stable_baselines3.common.vec_env import DummyVecEnv
 
 from sb3_twodrl import TwoDimA2C
-from tests.toy_envs import ScriptedFeedbackEnv
+from tests.helpers.toy_envs import ScriptedFeedbackEnv
 
 # A different cycle of (net reward, r_P) per env, so that a mix-up between envs shows
 CYCLES = [

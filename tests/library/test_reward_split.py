@@ -8,7 +8,7 @@ import pytest
 
 from sb3_twodrl import TwoDimA2C
 from sb3_twodrl.common.splitting import PYTHON_CHECK_MAX_ENVS, SPLIT_MODES, make_reward_split, split_rewards
-from tests.toy_envs import ScriptedFeedbackEnv
+from tests.helpers.toy_envs import ScriptedFeedbackEnv
 
 FEEDBACK: dict[str, list[tuple[float, dict[str, Any]]]] = {
     "info": [(4.99, {"punishment": 0.01}), (-1.0, {"punishment": 1.0})],

@@ -13,7 +13,7 @@ from stable_baselines3.common.evaluation import evaluate_policy
 from stable_baselines3.common.vec_env import SubprocVecEnv
 
 from sb3_twodrl import TwoDimA2C, TwoDimMultiInputPolicy
-from tests.toy_envs import LatticeCorridor
+from tests.helpers.toy_envs import LatticeCorridor
 
 
 class CountSteps(BaseCallback):

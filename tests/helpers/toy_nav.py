@@ -2,7 +2,7 @@
 
 It sets the same ``info`` keys as ``twodrl_envs`` (``punishment``, ``route``, ``is_success``, ``collision``,
 ``position_cm``) and the paper's evaluations, so that the metrics, zoo and reproduction code can be
-tested exactly and fast. ``import tests.toy_nav`` registers ``ToyNav-v0``.
+tested exactly and fast. ``import tests.helpers.toy_nav`` registers ``ToyNav-v0``.
 """
 
 from __future__ import annotations

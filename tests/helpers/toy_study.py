@@ -1,4 +1,4 @@
-"""A tiny study on ``ToyNavRandom-v0`` (``tests.toy_nav``): settings files and a spec for the runner's tests."""
+"""A tiny study on ``ToyNavRandom-v0`` (``tests.helpers.toy_nav``): settings files and a spec for the runner's tests."""
 
 from __future__ import annotations
 
@@ -28,7 +28,7 @@ def toy_spec(settings: Path, name: str = "toy", **changes: Any) -> dict[str, Any
     spec = {
         "name": name,
         "env": ENV,
-        "gym_packages": ["tests.toy_nav"],
+        "gym_packages": ["tests.helpers.toy_nav"],
         "protocol": {"epochs": 3, "learn_episodes": 8, "test_episodes": 4},
         "seeds": [0, 1],
         "arms": arms,

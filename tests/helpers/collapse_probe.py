@@ -1,12 +1,12 @@
 """The collapse probe (``results/collapse_probe/``): does training bring an actor that has collapsed onto
 driving into the wall back to the goal?
 
-``tests.toy_envs.LatticeCorridor(6, 3)`` (60-step limit, 4 envs, gamma 0.9), the actor's bias set to
+``tests.helpers.toy_envs.LatticeCorridor(6, 3)`` (60-step limit, 4 envs, gamma 0.9), the actor's bias set to
 ``lead`` for west (the wall at the start) before training, 20k steps; then 20 stochastic test episodes
 (goal, crash) and the greedy policy's outcome, one Markdown row per (setting, lead, ``ent_coef``, seed).
-It lives beside the corridor it trains on (``tests/toy_envs.py``, which ``tests/test_interest.py`` also runs the
-probe's cases on); run from the repository root: ``python -m tests.collapse_probe [SETTING ...]`` (default: every
-setting).
+It lives beside the corridor it trains on (``tests/helpers/toy_envs.py``, which ``tests/bench/test_interest.py``
+also runs the probe's cases on); run from the repository root: ``python -m tests.helpers.collapse_probe
+[SETTING ...]`` (default: every setting).
 """
 
 import itertools
@@ -17,7 +17,7 @@ import torch as th
 from gymnasium.wrappers import TimeLimit
 from stable_baselines3.common.env_util import make_vec_env
 
-from tests.toy_envs import LatticeCorridor
+from tests.helpers.toy_envs import LatticeCorridor
 from twodrl_bench.algorithms.variants import VariantTwoDimA2C as TwoDimA2C  # the interest modes are variants
 
 SETTINGS = {

@@ -25,4 +25,4 @@ def cpu_flags() -> set[str]:
 
 RECORDING_KERNELS = "avx512_fp16" in cpu_flags()
 """True where the CPU has the recording CPU's AVX512-FP16 (the rows are expected to be equal bit for bit)."""
-WHY = "the committed rows were made on a CPU with AVX512-FP16 (tests/recording_cpu.py); this one lacks it"
+WHY = "the committed rows were made on a CPU with AVX512-FP16 (tests/helpers/recording_cpu.py); this one lacks it"
