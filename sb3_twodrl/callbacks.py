@@ -29,6 +29,8 @@ import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
 
 __all__ = [
+    "PATIENCE",
+    "SUCCESS_THRESHOLD",
     "EpisodeRecord",
     "EpisodeTracker",
     "GoalCheck",
@@ -228,6 +230,13 @@ class StopAfterEpisodes(BaseCallback):
         return self.n_episodes < self.max_episodes
 
 
+SUCCESS_THRESHOLD = 0.8
+"""The goal rate at which a navigation task counts as learned (the paper's 80% of test trials, section 3.4): the
+default of :class:`GoalRecord` and :class:`GoalCheckCallback`, and the one threshold of the commands and the bench."""
+PATIENCE = 2
+"""Consecutive checks at :data:`SUCCESS_THRESHOLD` after which a task counts as learned (the default)."""
+
+
 @dataclass(frozen=True)
 class GoalCheck:
     """One check of :class:`GoalCheckCallback`: when, the share of its episodes that reached the goal, their mean
@@ -247,7 +256,7 @@ class GoalRecord:
     :raises ValueError: if ``success_threshold`` is not in (0, 1] or ``patience`` is not a positive int
     """
 
-    def __init__(self, success_threshold: float | None = 0.8, patience: int = 2) -> None:
+    def __init__(self, success_threshold: float | None = SUCCESS_THRESHOLD, patience: int = PATIENCE) -> None:
         if success_threshold is not None and not 0.0 < success_threshold <= 1.0:
             raise ValueError(f"success_threshold must be in (0, 1] or None, got {success_threshold!r}")
         if isinstance(patience, bool) or not isinstance(patience, int) or patience < 1:
@@ -301,8 +310,8 @@ class GoalCheckCallback(EvalCallback):
     def __init__(
         self,
         eval_env: Any,
-        success_threshold: float | None = 0.8,
-        patience: int = 2,
+        success_threshold: float | None = SUCCESS_THRESHOLD,
+        patience: int = PATIENCE,
         eval_freq: int = 10_000,
         n_eval_episodes: int = 5,
         deterministic: bool = True,

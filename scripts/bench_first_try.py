@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 import twodrl_envs  # noqa: F401  (registers NomadOffice-v0, for its task facts)
+from sb3_twodrl.callbacks import SUCCESS_THRESHOLD
 from twodrl_bench.folders import append_row
 from twodrl_bench.intervals import wilson
 from twodrl_zoo.hyperparams import task_facts
@@ -61,7 +62,7 @@ def _row(map_: str, size: str, moves: int, algo: str, seed: int, rate: float, re
         "algo": algo,
         "seed": seed,
         "goal_rate": rate,
-        "learned": rate >= 0.8,
+        "learned": rate >= SUCCESS_THRESHOLD,
         "stopped_learned": record["learned_at"] is not None,
         "kept_at": record["kept"]["timesteps"] if record["kept"] else "",
         "steps": record["num_timesteps"],
@@ -215,7 +216,7 @@ def table(rows: list[dict[str, str]]) -> str:
 
 def _learned_by(record: dict, steps: float) -> bool:
     """Whether a check of the run ``record`` (``goal_checks.json``) up to ``steps`` reached 0.8."""
-    return any(c["goal_rate"] >= 0.8 for c in record["checks"] if c["timesteps"] <= steps)
+    return any(c["goal_rate"] >= SUCCESS_THRESHOLD for c in record["checks"] if c["timesteps"] <= steps)
 
 
 def restart_table(

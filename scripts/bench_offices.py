@@ -25,6 +25,7 @@ from stable_baselines3.common.vec_env import VecEnv
 
 import twodrl_envs  # noqa: F401  (registers the IDs)
 from sb3_twodrl import ALGOS
+from sb3_twodrl.callbacks import SUCCESS_THRESHOLD
 from twodrl_bench.folders import append_row
 from twodrl_bench.intervals import wilson
 from twodrl_envs.nomad.core import office_core
@@ -63,7 +64,7 @@ class LearnedStop(BaseCallback):
         self.pause()
         self.rate = goal_rate(run_episodes(self.model, self.test_env))
         self._on_training_start()
-        if self.rate >= 0.8:
+        if self.rate >= SUCCESS_THRESHOLD:
             self.learned_steps = self.num_timesteps
             return False
         return True
@@ -88,7 +89,7 @@ def run(algo: str, map_: str, seed: int, eval_every: int) -> dict[str, object]:
         "moves": facts["shortest_path"],
         "algo": algo,
         "seed": seed,
-        "learned": stop.rate >= 0.8,
+        "learned": stop.rate >= SUCCESS_THRESHOLD,
         "train_s": round(stop.train_s, 1),
         "train_cpu_s": round(stop.train_cpu_s, 1),
         "steps": stop.learned_steps if stop.learned_steps >= 0 else model.num_timesteps,

@@ -194,7 +194,9 @@ def verdict(rate: float, record: dict[str, Any]) -> str:
     """What the final test's goal ``rate`` and the run's goal checks (``goal_checks.json``'s ``record``) say, in one
     sentence: learned; the checks passed but the test did not (readings that vary from visit to visit); or no check
     passed (nothing learned is kept), with what to try."""
-    threshold = record.get("threshold", 0.8)
+    from sb3_twodrl.callbacks import SUCCESS_THRESHOLD
+
+    threshold = record.get("threshold", SUCCESS_THRESHOLD)
     checks, passed = record["checks"], record.get("passed")
     if not checks:
         return f"learned (the final test reaches {threshold})" if rate >= threshold else f"below {threshold}"

@@ -225,6 +225,7 @@ as Python literals) the env's input stage goes before the actor: the Nomad envs'
 def unlearned_warning(model_path: str | Path) -> str | None:
     """What to warn of when exporting the model at ``model_path``: None, unless the train command's record beside it
     (``goal_checks.json``, :mod:`twodrl_zoo.manager`) shows that no goal check passed."""
+    from sb3_twodrl.callbacks import SUCCESS_THRESHOLD
     from twodrl_zoo.manager import CHECKS_FILE
 
     record_path = Path(model_path).parent / CHECKS_FILE
@@ -232,7 +233,7 @@ def unlearned_warning(model_path: str | Path) -> str | None:
         return None
     record = json.loads(record_path.read_text())
     checks = record.get("checks") or []
-    threshold = record.get("threshold", 0.8)
+    threshold = record.get("threshold", SUCCESS_THRESHOLD)
     if not checks or record.get("passed", any(c["goal_rate"] >= threshold for c in checks)):
         return None
     best = max(c["goal_rate"] for c in checks)

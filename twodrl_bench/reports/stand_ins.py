@@ -16,10 +16,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from sb3_twodrl.callbacks import SUCCESS_THRESHOLD
 from twodrl_bench.intervals import mean_ci
 from twodrl_bench.reports import Part
 
-LEARNED = 0.8
+LEARNED = SUCCESS_THRESHOLD
 """A robot "runs" a policy at this success share or more (the office's learned rule)."""
 
 
