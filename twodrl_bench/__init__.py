@@ -10,11 +10,12 @@
 - :mod:`.reports`: what a study's rows say (tables, figures);
 - :mod:`.cli`: ``sb3-twodrl-bench run | report | status``;
 - :mod:`.algorithms`: the bench's algorithms (stock arms on the fast path, variants, self-tuning entropy) by name;
-- shared machinery: :mod:`.protocol` (CSV columns, trial seeds),
-  :mod:`.vec_env` (batched VecEnvs), :mod:`.trials` (an epoch's test trials), :mod:`.checkpoint`,
-  :mod:`.intervals`, :mod:`.plots`.
+- shared machinery: :mod:`.protocol` (CSV columns, trial seeds), :mod:`.trials` (an epoch's test trials),
+  :mod:`.checkpoint`, :mod:`.intervals`, :mod:`.plots`; the batched VecEnvs are the app's
+  (:mod:`twodrl_zoo.vec_env`).
 
-Nothing here imports an env package: envs are named by ID, their packages by ``gym_packages``.
+Nothing here imports an env package: envs are named by ID, their packages by ``gym_packages``, and the route labels
+whose shares are columns by value (:data:`.protocol.ROUTES`).
 """
 
 from twodrl_bench.machine import use_reproducible_kernels

@@ -8,7 +8,6 @@ import gymnasium as gym
 import pytest
 
 import twodrl_envs  # noqa: F401  (registers the IDs)
-from twodrl_bench.protocol import parse_env_kwargs
 from twodrl_bench.reports import find_parts, transfer
 from twodrl_bench.runner import run_study
 from twodrl_bench.spec import load_spec, validate
@@ -44,13 +43,6 @@ def test_sensors_only_envs_drop_the_odometry() -> None:
     full = gym.make("NomadOfficeReal-v0").observation_space.shape[0]
     sensors = gym.make("NomadOfficeReal-v0", observe_odometry=False).observation_space.shape[0]
     assert sensors == full - 2 == 32
-
-
-@pytest.mark.parametrize("items", [["observe_odometry"], ["observe_odometry:maybe"], ["not a key:1"]])
-def test_bad_env_kwargs_are_named(items) -> None:
-    with pytest.raises(ValueError, match="key:value"):
-        parse_env_kwargs(items)
-    assert parse_env_kwargs(["observe_odometry:False", "map:'open'"]) == {"observe_odometry": False, "map": "open"}
 
 
 @pytest.mark.parametrize(

@@ -23,11 +23,19 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from twodrl_envs import MAX_EPISODE_STEPS
-from twodrl_envs.nomad.core import ROUTES, IdealRobot, OfficeCore, Robot, episode_keys, office_core, remembered_route
+from twodrl_envs.nomad.core import (
+    ROUTE_LABELS,
+    IdealRobot,
+    OfficeCore,
+    Robot,
+    episode_keys,
+    office_core,
+    remembered_route,
+)
 from twodrl_envs.nomad.episode import RENDER_MODES, Episodes, base_key, non_negative, sensor_noise_model
 from twodrl_envs.nomad.sensors import NoiseModel
 
-_ROUTE_NAMES = np.array(ROUTES, dtype=object)
+_ROUTE_NAMES = np.array(ROUTE_LABELS, dtype=object)
 
 
 class BatchedNomadOffice(VectorEnv):

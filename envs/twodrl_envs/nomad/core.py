@@ -7,8 +7,8 @@
   code, evaluations), computed from the move table by the rules above; the single env reads it with Python
   indices, the batched env with arrays.
 * :func:`continuous_move`: a move off the lattice (swept-disc collision test, bounds, route code, goal).
-* :data:`ROUTES` / :data:`ROUTE_CODES`: the route labels and their codes, :func:`route_code_at` and
-  :func:`remembered_route` (``info["route"]`` is the route region entered last).
+* :data:`ROUTE_LABELS` / :data:`ROUTE_CODES`: the label of each route code and the code of each label,
+  :func:`route_code_at` and :func:`remembered_route` (``info["route"]`` is the route region entered last).
 * :class:`Robot`: the one seam between the ideal, realistic and replay (MEMORABLE) robots: how a command
   moves the robot and what it reads. :class:`IdealRobot` is the simulator's.
 
@@ -46,9 +46,9 @@ from twodrl_envs.nomad.sensors import NoiseModel
 GOAL_REWARD = 5.0  # r_R, eq. 11
 COLLISION_PUNISHMENT = 1.0  # r_P on collision, eq. 12
 MOVE_PUNISHMENT = 0.01  # r_P for every (non-colliding) move, eq. 12
-ROUTES: tuple[str | None, ...] = (None, *ROUTE_REGIONS)
+ROUTE_LABELS: tuple[str | None, ...] = (None, *ROUTE_REGIONS)
 """``info["route"]`` of route code 0, 1, 2: none yet, then the map's route regions (``shortcut``, ``detour``)."""
-ROUTE_CODES = {name: code for code, name in enumerate(ROUTES) if name is not None}
+ROUTE_CODES = {name: code for code, name in enumerate(ROUTE_LABELS) if name is not None}
 """Route code of each route label."""
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _MASK64 = (1 << 64) - 1

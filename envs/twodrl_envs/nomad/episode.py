@@ -291,7 +291,7 @@ class Episodes:
 
     def info(self, punishment: Any, collided: Any, route: Any, position: Any, goal: Any) -> dict[str, Any]:
         """A step's ``info`` (:data:`INFO_KEYS`) of one robot (Python values) or N (arrays); ``route`` is the
-        label of the route code (:data:`~twodrl_envs.nomad.core.ROUTES`), left out on a map without routes."""
+        label of the route code (:data:`~twodrl_envs.nomad.core.ROUTE_LABELS`), left out on a map without routes."""
         info = {
             "punishment": punishment,
             "collision": collided,

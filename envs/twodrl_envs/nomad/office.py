@@ -14,7 +14,15 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from twodrl_envs.nomad.core import ROUTES, IdealRobot, OfficeCore, Robot, episode_key, office_core, remembered_route
+from twodrl_envs.nomad.core import (
+    ROUTE_LABELS,
+    IdealRobot,
+    OfficeCore,
+    Robot,
+    episode_key,
+    office_core,
+    remembered_route,
+)
 from twodrl_envs.nomad.episode import Episodes, base_key, non_negative, sensor_noise_model
 from twodrl_envs.nomad.sensors import NoiseModel
 from twodrl_envs.nomad.task import task_facts
@@ -151,7 +159,7 @@ class NomadOfficeEnv(gym.Env):
         self._trajectory = [tuple(self._pos)]
         observation = self._observe_one(self._cell, self._key, 0) if self._cell >= 0 else self._pose_observation()
         position = (float(self._pos[0]), float(self._pos[1]))
-        return observation, self._info_of(0.0, False, ROUTES[self._route], position, False)
+        return observation, self._info_of(0.0, False, ROUTE_LABELS[self._route], position, False)
 
     def step(self, action: Any) -> tuple[np.ndarray | int, float, bool, bool, dict[str, Any]]:
         """Move 10 cm; eq. 11-12 evaluations; terminate on collision or goal."""
@@ -176,7 +184,7 @@ class NomadOfficeEnv(gym.Env):
         if self.render_mode is not None:
             self._trajectory.append(tuple(self._pos))
         info = self._info_of(
-            punishment, collided, ROUTES[self._route], (float(self._pos[0]), float(self._pos[1])), goal
+            punishment, collided, ROUTE_LABELS[self._route], (float(self._pos[0]), float(self._pos[1])), goal
         )
         return observation, reward, collided or goal, False, info
 
