@@ -1,5 +1,5 @@
-"""SB3's own contract, as SB3's tests state it (``tests/test_save_load.py::test_save_load_policy``,
-``tests/test_identity.py::test_discrete``), with the 2D-RL algorithms standing in."""
+"""SB3's own contract, as SB3's tests state it (its ``test_save_load.py::test_save_load_policy`` and
+``test_identity.py::test_discrete``), with the 2D-RL algorithms standing in."""
 
 import inspect
 from copy import deepcopy

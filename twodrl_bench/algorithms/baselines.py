@@ -2,7 +2,7 @@
 
 :class:`FastActorCriticPolicy` computes SB3's action scores with the library's ``Categorical`` formulas
 (:mod:`sb3_twodrl.common.fast`, the same operations with fewer Python calls) and a multi-tensor optimizer.
-Neither changes a number: ``tests/test_fast.py`` checks the parameters after learning against stock SB3's
+Neither changes a number: ``tests/bench/test_fast.py`` checks the parameters after learning against stock SB3's
 bitwise. The 2D-RL algorithms have both already, so the two arms of a comparison run the same pipeline.
 """
 

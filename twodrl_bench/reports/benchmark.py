@@ -1,4 +1,4 @@
-"""Report of the public-task benchmark (``benchmark/<Task>`` specs, docs/benchmark.md): one table over the tasks,
+"""Report of the public-task benchmark (``benchmark/<Task>`` specs, docs/public_tasks.md): one table over the tasks,
 each 2D-RL arm against its stock arm with the pre-registered verdict, and a learning-curve figure per task.
 
 Each spec's ``rules`` hold what the report reads: ``compare`` (2D-RL arm -> stock arm), ``min_seeds`` (fewer
@@ -80,7 +80,7 @@ def verdict(
     ev_st: Sequence[float],
     min_seeds: int,
 ) -> str:
-    """The pre-registered rule (docs/benchmark.md): 95% Welch intervals of 2D - stock on the return and the events.
+    """The pre-registered rule (docs/public_tasks.md): 95% Welch intervals of 2D - stock on the return and the events.
 
     Helps if the return's interval is wholly above 0, or the events' wholly below 0 and the return's not wholly
     below 0; hurts if the return's is wholly below 0 or the events' wholly above 0; both: trade-off. Events are
