@@ -50,6 +50,8 @@ DATABASE_FIELDS = (*FIELDS, "db_goal_rate")
 LINE = re.compile(r"goal rate (\d\.\d\d) \((\d+) of (\d+)")
 EXPORT = re.compile(r"^sb3-twodrl-train: export: (.*)$", re.MULTILINE)
 STAND_IN = re.compile(r"^goal rate on the stand-in robot: (\d\.\d\d)", re.MULTILINE)
+AGREE = 0.2
+"""On the database path, the final test and the robot agree when their goal rates differ by at most this."""
 DOC = Path(__file__).resolve().parents[1] / "docs" / "own_office.md"
 
 
@@ -184,11 +186,14 @@ def run(
 
 
 def table(rows: list[dict[str, str]]) -> str:
-    """Per size and algorithm: offices at goal rate >= 0.8 (95% Wilson interval), wall seconds median and max."""
+    """Per size and algorithm: offices at goal rate >= 0.8 (95% Wilson interval), wall seconds median and max; where
+    every row is of the database path (``db_goal_rate``), also the runs whose final test and robot agree (:data:`AGREE`)."""
+    database = all(r.get("db_goal_rate") for r in rows)
+    agree = " | final test and robot within 0.2" if database else ""
     lines = [
         "| size | algo | offices at goal rate >= 0.8 [95% interval] | share | stopped as learned "
-        "| wall s, median (max) |",
-        "| --- | --- | --- | --- | --- | --- |",
+        f"| wall s, median (max){agree} |",
+        "| --- | --- | --- | --- | --- | --- |" + (" --- |" if database else ""),
     ]
     for size in ("paper", "S", "M", "S+M", "L"):
         for algo in sorted({r["algo"] for r in rows}, reverse=True):
@@ -201,15 +206,21 @@ def table(rows: list[dict[str, str]]) -> str:
             low, high = wilson(good, len(group))
             stopped = sum(r["stopped_learned"] == "True" for r in group)
             wall = sorted(float(r["wall_s"]) for r in group)
+            close = database and sum(
+                abs(float(r["goal_rate"]) - float(r["db_goal_rate"])) <= AGREE + 1e-9 for r in group
+            )
             lines.append(
                 f"| {size} | {algo} | {good}/{len(group)} [{low:.2f}, {high:.2f}] | {good / len(group):.2f} | "
                 f"{stopped}/{len(group)} | {np.median(wall):.0f} ({wall[-1]:.0f}) |"
+                + (f" {close}/{len(group)} |" if database else "")
             )
-    lines += ["", "| map | moves | algo | seed | goal rate | kept at | steps | budget | wall s |", "|" + " --- |" * 9]
+    head = "| map | moves | algo | seed | goal rate | kept at | steps | budget | wall s |"
+    lines += ["", head + (" final test |" if database else ""), "|" + " --- |" * (10 if database else 9)]
     for r in sorted(rows, key=lambda r: (int(r["moves"]), r["map"], r["algo"])):
         lines.append(
             f"| {r['map']} | {r['moves']} | {r['algo']} | {r['seed']} | {float(r['goal_rate']):.2f} | {r['kept_at']} | "
             f"{r['steps']} | {r['budget']} | {r['wall_s']} |"
+            + (f" {float(r['db_goal_rate']):.2f} |" if database else "")
         )
     return "\n".join(lines) + "\n"
 
