@@ -13,6 +13,8 @@ from typing import Any
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 pytest.importorskip("rosbags")
 
@@ -21,6 +23,7 @@ from rosbags.rosbag2 import Writer
 from rosbags.typesys import Stores, get_typestore
 
 from twodrl_envs.analysis.bags import (
+    ANGLE_TOLERANCE_RAD,
     GROUND_TRUTH_TOPIC,
     INFRARED,
     IR_SCAN_TOPIC,
@@ -28,10 +31,11 @@ from twodrl_envs.analysis.bags import (
     SONAR_SCAN_TOPIC,
     import_bag,
     read_bag,
+    scan_columns,
     write_bag,
 )
 from twodrl_envs.analysis.cli import main
-from twodrl_envs.memorable.database import SensorDatabase, load_database
+from twodrl_envs.memorable.database import CSV_COLUMNS, SensorDatabase, load_database
 from twodrl_envs.memorable.recording import record_database
 from twodrl_envs.nomad.core import office_core
 from twodrl_envs.nomad.realistic import RealisticModel
@@ -132,6 +136,21 @@ def test_a_clockwise_or_turned_ring_scan_imports_to_the_same_database(
         bag, tmp_path / "mirrored", on(SONAR_SCAN_TOPIC, lambda m: dataclasses.replace(m, ranges=m.ranges[order]))
     )
     assert not np.array_equal(import_bag(mirrored, map=MAP, **SCANS).ranges_cm, good.ranges_cm)  # the order matters
+
+
+@given(
+    first=st.integers(-16, 16),
+    clockwise=st.booleans(),
+    jitter=st.floats(-0.9 * ANGLE_TOLERANCE_RAD, 0.9 * ANGLE_TOLERANCE_RAD),
+)
+def test_each_range_of_a_scan_goes_to_the_sensor_it_points_along(first: int, clockwise: bool, jitter: float) -> None:
+    """Range k points along angle_min + k * angle_increment; sensor i along i * 22.5 degrees: the nearest bearing."""
+    increment = (-1 if clockwise else 1) * SCAN_INCREMENT_RAD + jitter
+    angle_min = first * SCAN_INCREMENT_RAD - jitter
+    angles = angle_min + increment * np.arange(16)
+    sensors = SCAN_INCREMENT_RAD * np.arange(16)
+    nearest = np.argmax(np.cos(angles[:, None] - sensors[None, :]), axis=1)
+    np.testing.assert_array_equal(scan_columns("scan", angle_min, increment, 16), nearest)
 
 
 @pytest.mark.parametrize(
@@ -331,3 +350,13 @@ def test_the_ground_truth_topic_gives_the_true_positions(tmp_path: Path, drive) 
     np.testing.assert_allclose(
         read_bag(bag, map=MAP, pose=GROUND_TRUTH_TOPIC, pose_frame="map")[0], positions[:4], atol=1e-6
     )
+
+
+def test_a_partial_csv_log_names_allow_missing_too(tmp_path: Path, drive, capsys) -> None:
+    positions, readings = drive
+    log = tmp_path / "log.csv"
+    np.savetxt(
+        log, np.hstack([positions[:40], readings[:40]]), delimiter=",", header=",".join(CSV_COLUMNS), comments=""
+    )
+    err = command_error(capsys, ["--from-csv", str(log), "--out", str(tmp_path / "x.npz")])
+    assert f"--from-csv: {log}: " in err and "pass --allow-missing" in err and "require_all_cells" not in err
