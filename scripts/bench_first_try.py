@@ -187,7 +187,8 @@ def run(
 
 def table(rows: list[dict[str, str]]) -> str:
     """Per size and algorithm: offices at goal rate >= 0.8 (95% Wilson interval), wall seconds median and max; where
-    every row is of the database path (``db_goal_rate``), also the runs whose final test and robot agree (:data:`AGREE`)."""
+    every row is of the database path (``db_goal_rate``), also the runs whose final test and robot agree
+    (:data:`AGREE`)."""
     database = all(r.get("db_goal_rate") for r in rows)
     agree = " | final test and robot within 0.2" if database else ""
     lines = [
