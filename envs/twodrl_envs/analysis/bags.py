@@ -86,7 +86,7 @@ def import_rosbags() -> Any:
 def ring_topics(pattern: str, what: str) -> list[str]:
     """The topics of a ring of 16 sensors: ``pattern`` with ``{i}`` (16 ``Range`` topics), else one ``LaserScan``."""
     if not isinstance(pattern, str) or not pattern.startswith("/"):
-        raise ValueError(f"{what} topic must be a topic name starting with '/', got {pattern!r}")
+        raise ValueError(f"{what} topic must be a topic name starting with '/', got {pattern!r} (--{what}-topic)")
     if "{i}" in pattern:
         return [pattern.replace("{i}", str(i)) for i in range(N_SONAR)]
     return [pattern]
@@ -128,7 +128,10 @@ def sensor_rings(
                 (what, per_sensor), IR_FRAME if per_sensor else IR_RING_FRAME
             )
         if not isinstance(frame, str) or not frame:
-            raise ValueError(f"{what}_frame must be a frame id (a pattern with {{i}} for Range topics), got {frame!r}")
+            raise ValueError(
+                f"{what}_frame must be a frame id (a pattern with {{i}} for Range topics), got {frame!r} "
+                f"(--{what}-frame)"
+            )
         frames = [frame.replace("{i}", str(i)) for i in range(len(topics))]
         sonar_ring = what == "sonar"
         rings.append(
@@ -286,9 +289,9 @@ def read_bag(
     """
     frame = _check_frame(pose_frame)
     rings = sensor_rings(sonar, ir, sonar_frame, ir_frame)  # checked before the bag is opened
-    for what, topic in (("odometry", odometry), ("pose", pose)):
+    for what, topic, flag in (("odometry", odometry, "--odom-topic"), ("pose", pose, "--pose-topic")):
         if (topic is not None or what == "odometry") and (not isinstance(topic, str) or not topic.startswith("/")):
-            raise ValueError(f"{what} topic must be a topic name starting with '/', got {topic!r}")
+            raise ValueError(f"{what} topic must be a topic name starting with '/', got {topic!r} ({flag})")
     pose_topic = odometry if pose is None else pose
     pose_flags = (
         "--odom-topic / odometry=, or a pose topic: --pose-topic / pose=" if pose is None else "--pose-topic / pose="
