@@ -3,12 +3,17 @@
 A Nomad-like robot publishes its 16 sonar and 16 infrared ranges as ``sensor_msgs/msg/Range`` topics (one per
 sensor, e.g. ``/sonar_0`` .. ``/sonar_15``) or as one ``sensor_msgs/msg/LaserScan`` per ring (16 ranges, sensor
 ``i`` at ``i * 22.5`` degrees counter-clockwise from the robot's front), and its odometry as
-``nav_msgs/msg/Odometry``. :func:`read_bag` turns the bag into the arrays the CSV import produces (the positions
+``nav_msgs/msg/Odometry`` (the conventions below; the reference: ``docs/bags.md``). :func:`read_bag` turns the bag into the arrays the CSV import produces (the positions
 the readings were taken at and the 32 ranges in cm) and :func:`import_bag` files them under lattice cells by the
 same code (:func:`~twodrl_envs.memorable.database.import_readings`).
 
 * **a reading**: the 32 ranges once every sensor has published since the previous reading, at the latest pose;
   readings before the first pose are skipped (counted in the metadata);
+* **what each message says about itself** is checked (:func:`message_ranges`): its frame id against the sensor
+  layout (:func:`sensor_rings`), a ``Range``'s ``radiation_type``, the declared ``min_range``/``max_range``
+  against the sensor model (a bag in centimetres declares a sonar's 600), every range (none beyond
+  ``max_range``), and a scan's layout: a clockwise scan or one starting behind the robot is reordered to the
+  sensors' numbering (:func:`scan_columns`);
 * **units**: metres in the messages (REP 103), cm in the database; ``+inf`` (no echo within ``max_range``) reads
   the sensor's maximum and ``-inf`` (too close) its minimum (REP 117), and every range is saturated to the
   sensors' ranges (:mod:`twodrl_envs.nomad.sensors`), as the robot reports them;
@@ -17,8 +22,9 @@ same code (:func:`~twodrl_envs.memorable.database.import_readings`).
   (REP 103: x forward = north, y left = west); ``"map"``: the map's own frame (x east, y north), as a localiser
   publishes it.
 
-Every problem (no such bag, a missing topic, a wrong message type, no odometry, no complete reading) is a
-one-line ``ValueError`` naming it. :func:`write_bag` writes a drive as such a robot would log it (the tests'
+Every problem (no such bag, a missing topic, a wrong message type, no odometry, a message that contradicts the
+layout, no complete reading) is a one-line ``ValueError`` naming the topic, and the command flag that fixes it
+where one does. :func:`write_bag` writes a drive as such a robot would log it (the tests'
 round trip). ``rosbags`` (pure Python, no ROS installation) is imported when a bag is read or written.
 """
 
