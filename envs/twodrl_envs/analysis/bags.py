@@ -3,9 +3,10 @@
 A Nomad-like robot publishes its 16 sonar and 16 infrared ranges as ``sensor_msgs/msg/Range`` topics (one per
 sensor, e.g. ``/sonar_0`` .. ``/sonar_15``) or as one ``sensor_msgs/msg/LaserScan`` per ring (16 ranges, sensor
 ``i`` at ``i * 22.5`` degrees counter-clockwise from the robot's front), and its odometry as
-``nav_msgs/msg/Odometry`` (the conventions below; the reference: ``docs/bags.md``). :func:`read_bag` turns the bag into the arrays the CSV import produces (the positions
-the readings were taken at and the 32 ranges in cm) and :func:`import_bag` files them under lattice cells by the
-same code (:func:`~twodrl_envs.memorable.database.import_readings`).
+``nav_msgs/msg/Odometry`` (the conventions below; the reference: ``docs/bags.md``). :func:`read_bag` turns the
+bag into the arrays the CSV import produces (the positions the readings were taken at and the 32 ranges in cm)
+and :func:`import_bag` files them under lattice cells by the same code
+(:func:`~twodrl_envs.memorable.database.import_readings`).
 
 * **a reading**: the 32 ranges once every sensor has published since the previous reading, at the latest pose;
   readings before the first pose are skipped (counted in the metadata);
