@@ -1,16 +1,23 @@
 """Sphinx extension: the Markdown pages keep the links that work on a repository browser, and the site serves them.
 
-* A link from a page to a file of the repository outside ``docs/`` (a study's ``table.md``, a ``rows.csv``, a
-  script) becomes a download of that file (MyST's ``path:`` links): the site carries a copy.
+* The studies' records, every Markdown file under ``results/`` (a study's ``table.md`` and ``preregistration.md``,
+  ``MANIFEST.md``), are pages of the site at the same path (``results/<study>/table.md`` is the page
+  ``results/<study>/table``): the build copies them into ``docs/results/`` and removes that folder when it ends (a
+  folder it owns, ignored by git), and a link to one, or to a study part's folder that has a ``table.md``, goes to
+  that page.
+* A link to any other file of the repository outside ``docs/`` (a ``rows.csv``, a spec, a script) becomes a
+  download of that file (MyST's ``path:`` links): the site carries a copy.
 * ``<!-- readme: START | END -->`` on a line of its own is replaced by the README's text between the line
   ``START`` and the line ``END`` (both excluded), its links rewritten to resolve from ``docs/``: the install
   and quick-start pages show the README's sections, not a copy of them.
 
-A link to a folder has no page to go to: it is left as it is, and the build warns.
+A record's links resolve from its own folder, as on the repository browser. A link to another folder has no page to
+go to: it is left as it is, and the build warns.
 """
 
 import os
 import re
+import shutil
 from pathlib import Path
 
 from sphinx.application import Sphinx
@@ -19,6 +26,9 @@ LINK = re.compile(r"(!?)\[([^\]]*)\]\(([^)\s]+)\)")
 """A Markdown link or image: the ``!``, the text, the target."""
 README_SECTION = re.compile(r"^<!-- readme: (.+?) \| (.+?) -->$", re.MULTILINE)
 FENCE = re.compile(r"^(```.*?^```)", re.MULTILINE | re.DOTALL)
+RECORDS = "results"
+"""The folder of the studies' records, beside ``docs/``; their pages are under the same name in ``docs/``."""
+HEADING = re.compile(r"^(#{1,6}) ", re.MULTILINE)
 
 
 def readme_section(readme: Path, start: str, end: str) -> str:
@@ -32,16 +42,35 @@ def readme_section(readme: Path, start: str, end: str) -> str:
     return "\n".join(lines[first : lines.index(end, first)])
 
 
+def record_page(path: Path, srcdir: Path) -> Path | None:
+    """The page of the record at ``path`` (resolved): a Markdown file under the records, or a folder of them that
+    has a ``table.md``; None for anything else."""
+    records = srcdir.parent / RECORDS
+    if records not in path.parents:
+        return None
+    if path.is_dir() and (path / "table.md").is_file():
+        path = path / "table.md"
+    if path.suffix != ".md" or not path.is_file():
+        return None
+    return srcdir / RECORDS / path.relative_to(records)
+
+
 def rewrite_links(text: str, base: Path, page_dir: Path, srcdir: Path) -> str:
-    """``text``'s links, relative to ``base``, made relative to ``page_dir``; repository files outside ``srcdir``
-    become downloads. Links inside code fences, external links, anchors and images are kept."""
+    """``text``'s links, relative to ``base``, made relative to ``page_dir``: a record's goes to its page, another
+    repository file outside ``srcdir`` becomes a download. Links inside code fences, external links and anchors are
+    kept; images are made relative to ``page_dir`` and stay images."""
 
     def one(match: re.Match[str]) -> str:
         bang, label, target = match.groups()
-        if bang or "://" in target or target.startswith(("#", "mailto:", "path:", "project:")):
+        if "://" in target or target.startswith(("#", "mailto:", "path:", "project:")):
             return match[0]
         path, hash_, anchor = target.partition("#")
         resolved = (base / path).resolve()
+        if bang:
+            return f"![{label}]({os.path.relpath(resolved, page_dir).replace(os.sep, '/')})"
+        page = record_page(resolved, srcdir)
+        if page is not None:
+            resolved = page
         relative = os.path.relpath(resolved, page_dir).replace(os.sep, "/")
         if srcdir in resolved.parents:
             return f"[{label}]({relative}{hash_}{anchor})"
@@ -53,9 +82,65 @@ def rewrite_links(text: str, base: Path, page_dir: Path, srcdir: Path) -> str:
     return "".join(part if part.startswith("```") else LINK.sub(one, part) for part in parts)
 
 
+def mirror_records(srcdir: Path) -> list[Path]:
+    """Copy every record (Markdown file under the records) to its page's file under ``srcdir``, in a folder of its
+    own made afresh (a copy left by an interrupted build goes); the pages' files."""
+    records, pages = srcdir.parent / RECORDS, srcdir / RECORDS
+    remove_records(srcdir)
+    copies = []
+    for record in sorted(records.rglob("*.md")):
+        page = pages / record.relative_to(records)
+        page.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(record, page)
+        copies.append(page)
+    return copies
+
+
+def remove_records(srcdir: Path) -> None:
+    """Remove the records' pages' folder under ``srcdir``, if there is one."""
+    shutil.rmtree(srcdir / RECORDS, ignore_errors=True)
+
+
+def consecutive_headings(text: str) -> str:
+    """``text`` with each heading at most one level below the one before it (a record's ``###`` under its title
+    becomes ``##``); code fences are kept."""
+    level = 0
+
+    def one(match: re.Match[str]) -> str:
+        nonlocal level
+        level = min(len(match[1]), level + 1)
+        return "#" * level + " "
+
+    parts = FENCE.split(text)
+    return "".join(part if part.startswith("```") else HEADING.sub(one, part) for part in parts)
+
+
+def record_source(text: str, docname: str, srcdir: Path) -> str:
+    """A record's page: marked as reached by links (no table of contents lists it), titled by its path where it
+    has no title, its headings made consecutive, its links resolved from the record's folder."""
+    page_dir = (srcdir / docname).parent
+    text = rewrite_links(text, srcdir.parent / Path(docname).parent, page_dir, srcdir)
+    if not text.startswith("# "):
+        text = f"# {docname}.md\n\n{text}"
+    return f"---\norphan: true\n---\n\n{consecutive_headings(text)}"
+
+
+def on_builder_inited(app: Sphinx) -> None:
+    """Copy the records into their pages' files before the build looks for pages."""
+    mirror_records(Path(app.srcdir).resolve())
+
+
+def on_build_finished(app: Sphinx, exception: Exception | None) -> None:
+    """Remove the records' copies: outside a build the docs folder holds only the pages written for it."""
+    remove_records(Path(app.srcdir).resolve())
+
+
 def on_source_read(app: Sphinx, docname: str, source: list[str]) -> None:
-    """Fill a page's README sections, then rewrite its links to repository files."""
+    """Fill a page's README sections, then rewrite its links to repository files; a record's page its own way."""
     srcdir = Path(app.srcdir).resolve()
+    if docname.startswith(f"{RECORDS}/"):
+        source[0] = record_source(source[0], docname, srcdir)
+        return
     page_dir = (srcdir / docname).parent
     readme = srcdir.parent / "README.md"
 
@@ -67,6 +152,8 @@ def on_source_read(app: Sphinx, docname: str, source: list[str]) -> None:
 
 
 def setup(app: Sphinx) -> dict[str, bool]:
-    """Register the ``source-read`` handler."""
+    """Register the ``builder-inited``, ``source-read`` and ``build-finished`` handlers."""
+    app.connect("builder-inited", on_builder_inited)
+    app.connect("build-finished", on_build_finished)
     app.connect("source-read", on_source_read)
     return {"parallel_read_safe": True, "parallel_write_safe": True}

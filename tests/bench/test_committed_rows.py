@@ -1,8 +1,8 @@
 """The README's main study rerun gives the committed rows (issue 43): its first epoch, seed 0, both algorithms.
 
-The bench runs MKL's reproducible kernels (``MKL_CBWR=COMPATIBLE``, :mod:`twodrl_bench.machine`), so the rows do not
-depend on the CPU's instruction set; this checks that on whatever x86-64 CPU runs the tests. Without MKL (another
-architecture) torch takes other kernels and the rows are not expected to be equal: skipped.
+The bench runs MKL's reproducible kernels (``MKL_CBWR=COMPATIBLE``, :mod:`twodrl_bench.machine`), but kernels outside
+MKL still follow the CPU's instruction set: the test runs where the CPU is of the recording kind
+(:mod:`tests.helpers.recording_cpu`) and skips elsewhere, naming why; without MKL (another architecture) too.
 """
 
 from __future__ import annotations
