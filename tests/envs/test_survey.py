@@ -186,3 +186,16 @@ def test_an_existing_bag_is_not_overwritten(tmp_path: Path, capsys) -> None:
     with pytest.raises(SystemExit):
         main(["--map", MAP, "--out", str(tmp_path / "bag")])
     assert "--out" in capsys.readouterr().err
+
+
+def test_the_mujoco_robot_without_mujoco_says_which_extra(tmp_path: Path, capsys, monkeypatch) -> None:
+    from twodrl_envs.nomad import physics
+
+    def missing() -> None:
+        raise ModuleNotFoundError(f"{physics.MUJOCO_HINT} (No module named 'mujoco')", name="mujoco")
+
+    monkeypatch.setattr(physics, "import_mujoco", missing)
+    with pytest.raises(SystemExit):
+        main(["--map", MAP, "--out", str(tmp_path / "bag")])
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "--robot mujoco" in err and 'pip install "sb3-twodrl[mujoco]"' in err

@@ -66,6 +66,7 @@ from twodrl_envs.memorable.database import SensorDatabase, import_readings
 from twodrl_envs.nomad import sensors
 from twodrl_envs.nomad.core import OfficeCore, Robot, continuous_move, episode_key, office_core
 from twodrl_envs.nomad.geometry import MOVES_CM, SHIPPED_MAPS, STEP_CM, Lattice
+from twodrl_envs.nomad.physics import MuJoCoRobot
 from twodrl_envs.nomad.realistic import RealisticModel, RealisticRobot
 
 ROBOTS = ("mujoco", "artifact")
@@ -149,8 +150,6 @@ def cells_of(lattice: Lattice, xy: np.ndarray) -> np.ndarray:
 def make_robot(robot: str, core: OfficeCore, model: RealisticModel | None = None) -> Robot:
     """The :class:`~twodrl_envs.nomad.core.Robot` named ``robot`` (:data:`ROBOTS`) on ``core``'s map."""
     if robot == "mujoco":
-        from twodrl_envs.nomad.physics import MuJoCoRobot
-
         return MuJoCoRobot(core, model)
     if robot == "artifact":
         return RealisticRobot(core, model)
@@ -231,9 +230,9 @@ def drive_survey(
     key = np.array([episode_key(seed, 0)], dtype=np.uint64)
     truth = np.array(office.start, dtype=np.float64)
     odometry = truth.copy()
-    physics = hasattr(bot, "reset_motion")
-    if physics:
-        bot.reset_motion(truth)  # type: ignore[attr-defined]
+    physics = bot if isinstance(bot, MuJoCoRobot) else None  # moves in MuJoCo, from where it is placed
+    if physics is not None:
+        physics.reset_motion(truth)
     clock, step = 0.0, 0
     pose_s, truths, odometries = [clock], [truth.copy()], [odometry.copy()]
     reading_s: list[float] = []
@@ -274,8 +273,8 @@ def drive_survey(
                 banned.clear()
                 continue
             step += 1
-            if physics:
-                bot.place(truth)  # type: ignore[attr-defined]
+            if physics is not None:
+                physics.place(truth)
             shift = bot.displacement(np.array([action]), key, np.array([step]))
             target, collided, _, _ = continuous_move(office, truth[None], shift)
             moves += 1
@@ -285,7 +284,7 @@ def drive_survey(
                 banned.add(action)
             else:
                 truth = target[0]
-                odometry = odometry + (bot.odometry_cm if physics else MOVES_CM[action])  # type: ignore[attr-defined]
+                odometry = odometry + (MOVES_CM[action] if physics is None else physics.odometry_cm)
                 banned.clear()
             pose_s.append(clock)
             truths.append(truth.copy())
@@ -466,7 +465,10 @@ def main(argv: list[str] | None = None) -> None:
         parser.error(f"--seed must be >= 0, got {args.seed}")
     if args.out.exists():
         parser.error(f"--out {args.out} already exists: a survey writes a new bag")
-    import_rosbags()
+    try:
+        import_rosbags()
+    except ModuleNotFoundError as err:
+        parser.error(f"--out: {err}")
     began = shown = time.monotonic()
 
     def report(done: int, total: int, what: str) -> None:
@@ -482,6 +484,8 @@ def main(argv: list[str] | None = None) -> None:
         )
     except ValueError as err:  # a bad map: the map loader's one-line message
         parser.error(f"--map: {err}")
+    except ModuleNotFoundError as err:  # the MuJoCo robot without mujoco
+        parser.error(f"--robot {args.robot}: {err}")
     driven = time.monotonic()
     write_survey_bag(
         survey, args.out, storage=args.storage, scan=args.scan, progress=lambda d, t: report(d, t, "readings written")
