@@ -35,7 +35,7 @@ from twodrl_envs.memorable.recording import record_database, shortest_paths
 from twodrl_envs.nomad.core import OfficeCore, office_core
 from twodrl_envs.nomad.geometry import ROBOT_RADIUS_CM, swept_clearance
 from twodrl_envs.nomad.realistic import RealisticModel
-from twodrl_envs.nomad.sensors import N_SONAR
+from twodrl_envs.nomad.sensors import IR_MAX_CM, N_SONAR
 from twodrl_zoo.hyperparams import derived_settings, task_facts
 from twodrl_zoo.recipe import size_class
 
@@ -43,7 +43,7 @@ STAGES = ("checks", "paths", "database", "settings")
 LATE = 0.5
 """A run "learned late" when it stopped as learned after more than this share of its budget."""
 INTO_GOAL = 10
-"""Moves the robot's drives go on into the goal region past the shortest path's first goal cell."""
+"""Moves the robot's drives go on towards the goal region's centre past the shortest path's first goal cell."""
 TIGHT_CM = 5.0
 """A move of the shortest path is tight when its swept disc clears the walls by less than this."""
 FAR_CM = 50.0
@@ -122,16 +122,21 @@ def stage_checks(args: argparse.Namespace, plt: Any) -> dict[str, Any]:
     before = read_jsonl(args.before)
     after = read_jsonl(args.after) + [run_folder_record(label, Path(f)) for label, f in args.after_run]
     runs = chosen_runs(rows, "twoda2c")
-    fig, axes = plt.subplots(len(runs), 2, figsize=(10, 1.55 * len(runs) + 0.6), sharex=True, squeeze=False)
+    budgets = {(r["map"], int(r["seed"])): int(r["budget"]) for r in rows if "_2x" not in r["file"]}
+    n_rows = (len(runs) + 1) // 2
+    fig, axes = plt.subplots(n_rows, 4, figsize=(15, 1.5 * n_rows + 0.9), sharex=True, squeeze=False)
     summary = []
-    for (map_name, seed, why), (ax_rate, ax_return) in zip(runs, axes, strict=True):
-        old = longest(before, map_name, seed, "twoda2c")
-        new = longest(after, map_name, seed, "twoda2c")
+    for i, (map_name, seed, why) in enumerate(runs):
+        ax_rate, ax_return = axes[i // 2, 2 * (i % 2)], axes[i // 2, 2 * (i % 2) + 1]
         entry: dict[str, Any] = {"map": map_name, "seed": seed, "why": why}
-        for name, record, style in (("no progress", old, "C3"), ("progress 0.05", new, "C0")):
+        for name, record, style in (
+            ("no progress", longest(before, map_name, seed, "twoda2c"), "C3"),
+            ("progress 0.05", longest(after, map_name, seed, "twoda2c"), "C0"),
+        ):
             if record is None:
                 continue
-            steps = np.array([c["timesteps"] for c in record["checks"]]) / 1e6
+            at = np.array([int(c["timesteps"]) for c in record["checks"]])
+            steps = at / 1e6
             rates = np.array([c["goal_rate"] for c in record["checks"]])
             returns = np.array([c["mean_return"] for c in record["checks"]])
             ax_rate.plot(steps, rates, "-", color=style, lw=1.2, label=name)
@@ -140,30 +145,35 @@ def stage_checks(args: argparse.Namespace, plt: Any) -> dict[str, Any]:
             entry[name] = {
                 "source": record["file"],
                 "checks": len(rates),
-                "last_step": int(steps[-1] * 1e6),
-                "first_pass": None if len(passed) == 0 else int(steps[passed[0]] * 1e6),
+                "last_step": int(at[-1]),
+                "first_pass": None if len(passed) == 0 else int(at[passed[0]]),
                 "learned_at": record.get("learned_at"),
-                "time_limit_returns": int(np.sum(returns <= -2.99)),
-                "collision_returns": int(np.sum((returns > -2.0) & (returns < 0.0) & (rates == 0.0))),
+                "relapses": int(np.sum(rates[passed[0] :] < 0.8)) if len(passed) else None,
+                "time_limit_checks": int(np.sum((rates == 0.0) & (returns < -2.0))),
+                "collision_checks": int(np.sum((rates == 0.0) & (returns >= -2.0))),
             }
         summary.append(entry)
+        for ax in (ax_rate, ax_return):
+            ax.axvline(budgets[(map_name, seed)] / 1e6, color="0.5", ls=":", lw=1)
+            ax.tick_params(labelsize=7)
+            ax.grid(alpha=0.3)
         ax_rate.set_ylabel(f"{short(map_name)} seed {seed}\ngoal rate", fontsize=8)
         ax_rate.set_ylim(-0.05, 1.05)
         ax_return.set_ylabel("mean return", fontsize=8)
         ax_rate.set_title(why, fontsize=7, loc="left")
-        for ax in (ax_rate, ax_return):
-            ax.tick_params(labelsize=7)
-            ax.grid(alpha=0.3)
+    for ax in axes[-1]:
+        ax.set_xlabel("training steps (millions)", fontsize=8)
+    if len(runs) % 2:
+        axes[-1, 2].set_axis_off()
+        axes[-1, 3].set_axis_off()
     axes[0, 0].legend(fontsize=7, loc="center right")
-    axes[-1, 0].set_xlabel("training steps (millions)")
-    axes[-1, 1].set_xlabel("training steps (millions)")
     fig.suptitle(
         "Goal checks from the map's start, TwoDimA2C, development M offices: without the progress signal "
-        "(results/reliability) and with it (progress 0.05)\nreturn -3.0/-3.03: time limit reached (300/303 moves "
-        "x 0.01); about -1.1: a collision; with progress the return includes the signal",
-        fontsize=8,
+        "(results/reliability) and with it (progress 0.05); dotted: the budget B\nreturn about -3: the time limit "
+        "reached (300 moves x 0.01, the signal adds to it); about -1: a collision",
+        fontsize=9,
     )
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0, 1, 0.96 if n_rows > 3 else 0.9))
     fig.savefig(args.out / "goal_checks.png", dpi=DPI)
     plt.close(fig)
     return {"runs": summary, "late_share": LATE}
@@ -172,20 +182,28 @@ def stage_checks(args: argparse.Namespace, plt: Any) -> dict[str, Any]:
 # --- deterministic paths -----------------------------------------------------------------------------------------
 
 
-def rollout(model: Any, map_name: str) -> dict[str, Any]:
-    """The deterministic path of ``model`` from the map's start on ``NomadOffice-v0`` with the task's test options."""
-    derived = derived_settings("NomadOffice-v0", {"map": map_name})
-    test = {} if derived is None else derived.eval_env_kwargs
-    env = gym.make("NomadOffice-v0", map=map_name, **test)
-    obs, info = env.reset(seed=0)
+def episode(env: gym.Env, model: Any, deterministic: bool, seed: int) -> tuple[np.ndarray, bool, bool]:
+    """One episode of ``model`` from the env's start: the positions ``(moves + 1, 2)``, collided, reached the goal."""
+    obs, info = env.reset(seed=seed)
     positions, collided, goal, truncated = [info["position_cm"]], False, False, False
     while not (collided or goal or truncated):
-        action, _ = model.predict(obs, deterministic=True)
+        action, _ = model.predict(obs, deterministic=deterministic)
         obs, _, _, truncated, info = env.step(int(action))
         positions.append(info["position_cm"])
         collided, goal = bool(info["collision"]), bool(info["is_success"])
+    return np.array(positions), collided, goal
+
+
+def rollout(model: Any, map_name: str) -> dict[str, Any]:
+    """The deterministic path of ``model`` from the map's start on ``NomadOffice-v0`` with the task's test options,
+    and the goal rate of the stochastic policy from there (:data:`TRIALS` episodes)."""
+    derived = derived_settings("NomadOffice-v0", {"map": map_name})
+    test = {} if derived is None else derived.eval_env_kwargs
+    env = gym.make("NomadOffice-v0", map=map_name, **test)
+    xy, collided, goal = episode(env, model, True, 0)
+    model.set_random_seed(0)
+    stochastic = [episode(env, model, False, seed) for seed in range(TRIALS)]
     env.close()
-    xy = np.array(positions)
     first: dict[tuple[float, float], int] = {}
     loop_start = loop_period = None
     moved = xy[:-1] if collided else xy  # a collision leaves the robot where it was: no loop
@@ -201,6 +219,8 @@ def rollout(model: Any, map_name: str) -> dict[str, Any]:
         "time_limit": test.get("max_episode_steps"),
         "loop_start": loop_start,
         "loop_period": loop_period,
+        "stochastic_goal_rate": float(np.mean([g for _, _, g in stochastic])),
+        "stochastic_median_moves": float(np.median([len(p) - 1 for p, _, g in stochastic if g] or [np.nan])),
         "positions": xy.tolist(),
     }
 
@@ -218,19 +238,54 @@ def draw_office(ax: Any, core: OfficeCore) -> None:
     ax.set_yticks([])
 
 
-def shortest_to_goal(core: OfficeCore, into_goal: int = 0) -> np.ndarray:
-    """The cell centres ``(n, 2)`` of a shortest lattice path from the start to the goal, continued by up to
-    ``into_goal`` moves in its last direction (so that a drifting robot following it enters the goal region)."""
+def move_slack(core: OfficeCore, cells: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """How far (cm) the robot's swept disc clears the walls on the moves ``cells -> targets`` (lattice indices)."""
+    xy = core.lattice.cells
+    return swept_clearance(xy[cells], xy[targets], core.office.walls) - ROBOT_RADIUS_CM
+
+
+def shortest_to_goal(core: OfficeCore, into_goal: int = 0, widest: bool = False) -> np.ndarray:
+    """The cell centres ``(n, 2)`` of a shortest lattice path from the start to the goal: breadth-first search's
+    (:func:`~twodrl_envs.memorable.recording.shortest_paths`, the recorder's), or with ``widest`` the shortest path
+    whose tightest move clears the walls the most; continued by up to ``into_goal`` moves towards the goal region's
+    centre (so that a drifting robot following it enters the region)."""
     paths = shortest_paths(core)
+    length = np.array([len(p) if core.lattice.reachable[c] else -1 for c, p in enumerate(paths)])
     goal_cells = np.flatnonzero(core.goal & core.lattice.reachable)
-    actions = paths[int(goal_cells[np.argmin([len(paths[c]) for c in goal_cells])])]
-    cells = [core.start_cell]
-    for action in actions:
-        cells.append(int(core.lattice.moves[cells[-1], action]))
+    nearest = goal_cells[length[goal_cells] == length[goal_cells].min()]
+    moves = core.lattice.moves
+    if widest:
+        width = np.full(len(moves), -np.inf)
+        parent = np.full(len(moves), -1)
+        width[core.start_cell] = np.inf
+        for k in range(int(length[nearest[0]])):
+            layer = np.flatnonzero(length == k)
+            for action in range(4):
+                target = moves[layer, action]
+                ok = target >= 0
+                src, dst = layer[ok], target[ok]
+                ok = length[dst] == k + 1
+                src, dst = src[ok], dst[ok]
+                value = np.minimum(width[src], move_slack(core, src, dst))
+                for a_cell, b_cell, v in zip(src, dst, value, strict=True):
+                    if v > width[b_cell]:
+                        width[b_cell], parent[b_cell] = v, a_cell
+        cells = [int(nearest[np.argmax(width[nearest])])]
+        while cells[-1] != core.start_cell:
+            cells.append(int(parent[cells[-1]]))
+        cells = cells[::-1]
+    else:
+        cells = [core.start_cell]
+        for action in paths[int(nearest[0])]:
+            cells.append(int(moves[cells[-1], action]))
+    x0, y0, x1, y1 = core.office.regions["goal"]
+    centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2])
     for _ in range(into_goal):
-        if core.lattice.moves[cells[-1], actions[-1]] < 0:
+        options = moves[cells[-1]][moves[cells[-1]] >= 0]
+        distance = np.linalg.norm(core.lattice.cells[options] - centre, axis=1)
+        if distance.min() >= np.linalg.norm(core.lattice.cells[cells[-1]] - centre):
             break
-        cells.append(int(core.lattice.moves[cells[-1], actions[-1]]))
+        cells.append(int(options[np.argmin(distance)]))
     return core.lattice.cells[cells]
 
 
@@ -238,10 +293,13 @@ OUTCOMES = ("goal", "collision", "time limit")
 FIELD_COLOURS = ("#9bd49b", "#f4a3a3", "#f8c77e")
 
 
-def policy_field(model: Any, map_name: str, limit: int) -> tuple[np.ndarray, np.ndarray]:
+def policy_field(model: Any, map_name: str, limit: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Where the deterministic policy leads from every training start cell of ``NomadOffice-v0`` on ``map_name``:
-    the cells ``(n,)`` and their outcome ``(n,)`` (index into :data:`OUTCOMES`) within ``limit`` moves, followed on
-    the lattice's move table (the ideal robot's moves are the table's)."""
+    the cells ``(n,)``, their outcome ``(n,)`` (index into :data:`OUTCOMES`) within ``limit`` moves, followed on
+    the lattice's move table (the ideal robot's moves are the table's), and the policy's probability of its most
+    likely action there ``(n,)``."""
+    import torch
+
     env = gym.make("NomadOffice-v0", map=map_name)
     core = office_core(map_name)
     robot = env.unwrapped.robot  # type: ignore[attr-defined]
@@ -250,6 +308,10 @@ def policy_field(model: Any, map_name: str, limit: int) -> tuple[np.ndarray, np.
     env.close()
     actions = np.full(len(core.lattice.cells), -1)
     actions[reachable] = model.predict(obs, deterministic=True)[0]
+    top = np.zeros(len(core.lattice.cells))
+    with torch.no_grad():
+        probs = model.policy.get_distribution(model.policy.obs_to_tensor(obs)[0]).distribution.probs
+    top[reachable] = probs.max(dim=1).values.numpy()
     starts = robot.start_cells
     cell = starts.copy()
     outcome = np.full(len(starts), 2)
@@ -264,7 +326,11 @@ def policy_field(model: Any, map_name: str, limit: int) -> tuple[np.ndarray, np.
         running[rows] = reached & ~core.goal[np.maximum(nxt, 0)]
         if not running.any():
             break
-    return starts, outcome
+    return starts, outcome, top[starts]
+
+
+def median_or_none(values: np.ndarray) -> float | None:
+    return float(np.median(values)) if len(values) else None
 
 
 def stage_paths(args: argparse.Namespace, plt: Any) -> dict[str, Any]:
@@ -278,7 +344,7 @@ def stage_paths(args: argparse.Namespace, plt: Any) -> dict[str, Any]:
         model = ALGOS[algo].load(zip_path, device="cpu")
         path = rollout(model, dev_map(map_name))
         core = office_core(map_name)
-        starts, outcome = policy_field(model, map_name, int(path["time_limit"] or 300))
+        starts, outcome, top = policy_field(model, map_name, int(path["time_limit"] or 300))
         robot = gym.make("NomadOffice-v0", map=map_name).unwrapped.robot  # type: ignore[attr-defined]
         far = robot.goal_distance[starts] >= robot.goal_distance[core.start_cell]
         xy = core.lattice.cells[starts]
@@ -309,6 +375,10 @@ def stage_paths(args: argparse.Namespace, plt: Any) -> dict[str, Any]:
             | {k: v for k, v in path.items() if k != "positions"}
             | {f"cells_{name.replace(' ', '_')}": share for name, share in shares.items()}
             | {"cells_as_far_goal": float(np.mean(outcome[far] == 0))}
+            | {
+                f"top_prob_{name.replace(' ', '_')}": median_or_none(top[outcome == k])
+                for k, name in enumerate(OUTCOMES)
+            }
         )
     fig.tight_layout()
     fig.savefig(args.out / "paths.png", dpi=DPI)
@@ -338,7 +408,7 @@ def stage_basins(args: argparse.Namespace, plt: Any) -> list[dict[str, Any]]:
         for steps, path in checkpoints(Path(folder)):
             model = ALGOS[algo].load(path, device="cpu")
             start = rollout(model, map_name)
-            starts, outcome = policy_field(model, map_name, int(start["time_limit"] or 300))
+            starts, outcome, _ = policy_field(model, map_name, int(start["time_limit"] or 300))
             far = robot.goal_distance[starts] >= robot.goal_distance[core.start_cell]
             points.append(
                 {
@@ -388,6 +458,7 @@ def readings_stats(core: OfficeCore, db: SensorDatabase) -> dict[str, Any]:
     """Per-cell spread (cm) and aliasing (normalised readings, the policy's input) of a database."""
     cells = np.flatnonzero(db.counts >= 2)
     spread = np.stack([db.cell_readings(int(c)).std(axis=0) for c in cells])  # (cells, 32) cm
+    near = np.stack([db.cell_readings(int(c))[:, N_SONAR:].mean(axis=0) for c in cells]) < IR_MAX_CM
     readings = db.readings()
     owner = np.repeat(np.arange(len(db.counts)), db.counts)
     means = np.zeros((len(db.counts), readings.shape[1]))
@@ -409,6 +480,7 @@ def readings_stats(core: OfficeCore, db: SensorDatabase) -> dict[str, Any]:
         "cells": int(recorded.sum()),
         "median_sonar_spread_cm": float(np.median(spread[:, :N_SONAR])),
         "median_ir_spread_cm": float(np.median(spread[:, N_SONAR:])),
+        "median_ir_spread_near_cm": float(np.median(spread[:, N_SONAR:][near])),
         "aliased_share": float(aliased.mean()),
         "aliased_far_share": float(far.mean()),
         "median_within_cell_distance": float(np.median(within[n > 1])),
@@ -428,55 +500,66 @@ def by_step(values: np.ndarray) -> list[float | None]:
 
 
 def robot_drives(core: OfficeCore, map_name: str, db: SensorDatabase, stats: dict[str, Any]) -> dict[str, Any]:
-    """:data:`TRIALS` drives of ``NomadOfficeReal-v0`` along the shortest lattice path from the start: the drift
-    (true pose - odometry, cm), the gap of each reading to the database readings of the odometry's cell (distance to
-    the cell's mean over the cell's median distance of its own readings to it), whether the nearest cell mean lies
-    more than :data:`FAR_CM` away, and the goal rate of the path."""
+    """:data:`TRIALS` drives of ``NomadOfficeReal-v0`` from the start along two shortest lattice paths
+    (:func:`shortest_to_goal`: breadth-first search's and the widest), open loop: their goal rates and collisions; on
+    the widest, the drift (true pose - odometry, cm), the gap of each reading to the database readings of the
+    odometry's cell (distance to the cell's mean over the cell's median distance of its own readings to it), and
+    whether the nearest cell mean lies more than :data:`FAR_CM` away."""
     derived = derived_settings("NomadOffice-v0", {"map": map_name})
     limit = None if derived is None else derived.eval_env_kwargs.get("max_episode_steps")
-    best = shortest_to_goal(core, into_goal=INTO_GOAL)
-    cells = [core.lattice.index(xy) for xy in best]
-    actions = [int(np.flatnonzero(core.lattice.moves[a] == b)[0]) for a, b in itertools.pairwise(cells)]
-    slack = swept_clearance(best[:-1], best[1:], core.office.walls) - ROBOT_RADIUS_CM
     env = gym.make("NomadOfficeReal-v0", map=map_name, max_episode_steps=limit)
     cell_median = np.full(len(db.counts), np.nan)
     for c in np.flatnonzero(db.counts > 1):
         cell_median[c] = np.median(stats["within"][stats["owner"] == c])
     recorded = np.flatnonzero(db.counts > 0)
-    drift = np.full((TRIALS, len(actions)), np.nan)
-    gap = np.full((TRIALS, len(actions)), np.nan)
-    far = np.zeros((TRIALS, len(actions)), dtype=bool)
-    goals, collision_steps = 0, []
-    for trial in range(TRIALS):
-        obs, _ = env.reset(seed=trial)
-        for step, action in enumerate(actions):
-            obs, _, terminated, truncated, info = env.step(action)
-            if info["collision"]:
-                collision_steps.append(step + 1)
-                break
-            cell = core.lattice.index(best[step + 1])
-            drift[trial, step] = float(np.linalg.norm(np.array(info["position_cm"]) - best[step + 1]))
-            reading = obs[: 2 * N_SONAR]
-            gap[trial, step] = np.linalg.norm(reading - stats["means"][cell]) / cell_median[cell]
-            nearest = recorded[nearest_cells(reading[None], stats["means"][recorded])[0]]
-            far[trial, step] = np.linalg.norm(db.cells[nearest] - db.cells[cell]) > FAR_CM
-            if info["is_success"] or terminated or truncated:
-                goals += int(info["is_success"])
-                break
+    out: dict[str, Any] = {}
+    for name, widest in (("bfs", False), ("widest", True)):
+        best = shortest_to_goal(core, into_goal=INTO_GOAL, widest=widest)
+        cells = [core.lattice.index(xy) for xy in best]
+        actions = [int(np.flatnonzero(core.lattice.moves[a] == b)[0]) for a, b in itertools.pairwise(cells)]
+        slack = move_slack(core, np.array(cells[:-1]), np.array(cells[1:]))
+        drift = np.full((TRIALS, len(actions)), np.nan)
+        gap = np.full((TRIALS, len(actions)), np.nan)
+        far = np.zeros((TRIALS, len(actions)), dtype=bool)
+        goals, collision_steps = 0, []
+        for trial in range(TRIALS):
+            obs, _ = env.reset(seed=trial)
+            for step, action in enumerate(actions):
+                obs, _, terminated, truncated, info = env.step(action)
+                if info["collision"]:
+                    collision_steps.append(step + 1)
+                    break
+                cell = cells[step + 1]
+                drift[trial, step] = float(np.linalg.norm(np.array(info["position_cm"]) - best[step + 1]))
+                if widest:
+                    reading = obs[: 2 * N_SONAR]
+                    gap[trial, step] = np.linalg.norm(reading - stats["means"][cell]) / cell_median[cell]
+                    nearest = recorded[nearest_cells(reading[None], stats["means"][recorded])[0]]
+                    far[trial, step] = np.linalg.norm(db.cells[nearest] - db.cells[cell]) > FAR_CM
+                if info["is_success"] or terminated or truncated:
+                    goals += int(info["is_success"])
+                    break
+        out |= {
+            f"{name}_tight_moves": int(np.sum(slack < TIGHT_CM)),
+            f"{name}_min_slack_cm": float(slack.min()),
+            f"{name}_goal_rate": goals / TRIALS,
+            f"{name}_collisions": len(collision_steps),
+            f"{name}_collision_moves": sorted(set(collision_steps)),
+        }
+        if widest:
+            out |= {
+                "path_moves": len(actions),
+                "final_drift_cm_median": float(
+                    np.median([d[np.isfinite(d)][-1] for d in drift if np.isfinite(d).any()])
+                ),
+                "max_drift_cm": float(np.nanmax(drift)),
+                "median_gap_ratio": float(np.nanmedian(gap)),
+                "robot_far_share": float(far[np.isfinite(gap)].mean()),
+                "drift_by_step": by_step(drift),
+                "gap_by_step": by_step(gap),
+            }
     env.close()
-    return {
-        "path_moves": len(actions),
-        "tight_moves": int(np.sum(slack < TIGHT_CM)),
-        "min_slack_cm": float(slack.min()),
-        "path_goal_rate": goals / TRIALS,
-        "collision_steps": collision_steps,
-        "final_drift_cm_median": float(np.median([d[np.isfinite(d)][-1] for d in drift if np.isfinite(d).any()])),
-        "max_drift_cm": float(np.nanmax(drift)),
-        "median_gap_ratio": float(np.nanmedian(gap)),
-        "robot_far_share": float(far[np.isfinite(gap)].mean()),
-        "drift_by_step": by_step(drift),
-        "gap_by_step": by_step(gap),
-    }
+    return out
 
 
 def stage_database(args: argparse.Namespace, plt: Any) -> dict[str, Any]:
@@ -489,33 +572,47 @@ def stage_database(args: argparse.Namespace, plt: Any) -> dict[str, Any]:
         derived = derived_settings("NomadOfficeMemorable-v0", {"map": map_name, "database": str(path)})
         offices.append(
             {"map": map_name, "size": map_name.split(":")[1]}
+            | {"shortest_path": (task_facts("NomadOffice-v0", {"map": map_name}) or {}).get("shortest_path")}
             | {k: v for k, v in stats.items() if k not in ("means", "within", "owner")}
             | drives
             | {"derived": None if derived is None else derived.hyperparams | {"check_episodes": derived.check_episodes}}
         )
         print(f"{map_name}: {json.dumps({k: v for k, v in offices[-1].items() if not k.endswith('by_step')})}")
     colours = {"S": "C2", "M": "C0", "L": "C3"}
-    fig, axes = plt.subplots(1, 4, figsize=(17, 3.8))
+    fig, grid = plt.subplots(2, 3, figsize=(14, 7.4))
+    axes = grid.ravel()
     for office in offices:
         c = colours[office["size"]]
-        x = office["path_moves"]
+        x = office["shortest_path"]
         axes[0].plot(x, office["median_sonar_spread_cm"], "o", color=c)
-        axes[0].plot(x, office["median_ir_spread_cm"], "^", color=c)
+        axes[0].plot(x, office["median_ir_spread_near_cm"], "^", color=c)
         axes[1].plot(x, office["aliased_far_share"], "o", color=c)
         axes[1].plot(x, office["robot_far_share"], "s", color=c, mfc="none")
-        axes[2].plot(office["drift_by_step"], "-", color=c, lw=1)
-        axes[3].plot(office["gap_by_step"], "-", color=c, lw=1)
-    axes[0].set(xlabel="shortest path (moves)", ylabel="median per-cell std (cm)", title="spread: o sonar, ^ IR")
+        axes[2].plot(x, office["bumped_share"], "o", color=c)
+        axes[3].plot(office["drift_by_step"], "-", color=c, lw=1)
+        axes[4].plot(office["gap_by_step"], "-", color=c, lw=1)
+        axes[5].plot(x, office["bfs_goal_rate"], "o", color=c)
+        axes[5].plot(x, office["widest_goal_rate"], "s", color=c, mfc="none")
+    moves = "shortest path (moves)"
+    along = "move along the widest shortest path"
+    axes[0].set(xlabel=moves, ylabel="median per-cell std (cm)", title="spread: o sonar, ^ IR below its 40 cm maximum")
     axes[1].set(
-        xlabel="shortest path (moves)",
+        xlabel=moves,
         ylabel=f"share nearest cell mean > {FAR_CM:.0f} cm away",
-        title="aliasing: o database readings, s robot's",
+        title="aliasing: o database readings, s the robot's",
     )
-    axes[2].set(xlabel="move along the shortest path", ylabel="median |true - odometry| (cm)", title="robot's drift")
-    axes[3].set(
-        xlabel="move along the shortest path",
-        ylabel="robot reading to cell mean / within-cell",
-        title="gap robot - database (1 = like a recorded reading)",
+    axes[2].set(xlabel=moves, ylabel="share of recording drives", title="recording drives that bumped (re-driven)")
+    axes[3].set(xlabel=along, ylabel="median |true - odometry| (cm)", title="the robot's drift")
+    axes[4].set(
+        xlabel=along,
+        ylabel="reading to cell mean / within-cell median",
+        title="gap robot - database (1: like a recorded reading)",
+    )
+    axes[5].set(
+        xlabel=moves,
+        ylabel=f"goal rate ({TRIALS} drives)",
+        ylim=(-0.03, 1.03),
+        title="the robot on a shortest path: o BFS's, s the widest",
     )
     for ax in axes:
         ax.grid(alpha=0.3)
@@ -524,9 +621,9 @@ def stage_database(args: argparse.Namespace, plt: Any) -> dict[str, Any]:
         axes[0].plot([], [], "o", color=c, label=size)
     axes[0].legend(fontsize=8)
     fig.suptitle(
-        f"Databases recorded as documented ({K} readings a cell, the stand-in robot, seed 0) and {TRIALS} drives of "
-        "NomadOfficeReal-v0 along the shortest lattice path from the start",
-        fontsize=9,
+        f"Databases recorded as documented ({K} readings a cell, the stand-in robot, seed 0); {TRIALS} drives of "
+        "NomadOfficeReal-v0 from the start along a shortest lattice path, open loop",
+        fontsize=10,
     )
     fig.tight_layout()
     fig.savefig(args.out / "database_readings.png", dpi=DPI)
@@ -654,8 +751,9 @@ def write_summary(out: Path) -> None:
                     "last_step",
                     "first_pass",
                     "learned_at",
-                    "time_limit_returns",
-                    "collision_returns",
+                    "relapses",
+                    "time_limit_checks",
+                    "collision_checks",
                 ],
             ),
             "",
@@ -673,10 +771,14 @@ def write_summary(out: Path) -> None:
                     "time_limit",
                     "loop_start",
                     "loop_period",
+                    "stochastic_goal_rate",
+                    "stochastic_median_moves",
                     "cells_goal",
                     "cells_collision",
                     "cells_time_limit",
                     "cells_as_far_goal",
+                    "top_prob_goal",
+                    "top_prob_time_limit",
                     "policy",
                 ],
             ),
@@ -696,12 +798,12 @@ def write_summary(out: Path) -> None:
                 stage["database"]["offices"],
                 [
                     "map",
+                    "shortest_path",
                     "cells",
                     "path_moves",
-                    "tight_moves",
-                    "min_slack_cm",
                     "median_sonar_spread_cm",
                     "median_ir_spread_cm",
+                    "median_ir_spread_near_cm",
                     "aliased_share",
                     "aliased_far_share",
                     "median_odometry_error_cm",
@@ -711,8 +813,16 @@ def write_summary(out: Path) -> None:
                     "robot_far_share",
                     "final_drift_cm_median",
                     "max_drift_cm",
-                    "path_goal_rate",
-                    "collision_steps",
+                    "bfs_tight_moves",
+                    "bfs_min_slack_cm",
+                    "bfs_goal_rate",
+                    "bfs_collisions",
+                    "bfs_collision_moves",
+                    "widest_tight_moves",
+                    "widest_min_slack_cm",
+                    "widest_goal_rate",
+                    "widest_collisions",
+                    "widest_collision_moves",
                     "derived",
                 ],
             ),
