@@ -220,7 +220,7 @@ def rollout(model: Any, map_name: str) -> dict[str, Any]:
         "loop_start": loop_start,
         "loop_period": loop_period,
         "stochastic_goal_rate": float(np.mean([g for _, _, g in stochastic])),
-        "stochastic_median_moves": float(np.median([len(p) - 1 for p, _, g in stochastic if g] or [np.nan])),
+        "stochastic_median_moves": median_or_none(np.array([len(p) - 1 for p, _, g in stochastic if g])),
         "positions": xy.tolist(),
     }
 
