@@ -2,22 +2,22 @@
 
 * The studies' records, every Markdown file under ``results/`` (a study's ``table.md`` and ``preregistration.md``,
   ``MANIFEST.md``), are pages of the site at the same path (``results/<study>/table.md`` is the page
-  ``results/<study>/table``): the build copies them into ``docs/results/`` and removes that folder when it ends (a
-  folder it owns, ignored by git), and a link to one, or to a study part's folder that has a ``table.md``, goes to
-  that page.
+  ``results/<study>/table``): the build copies them into ``docs/results/`` (a folder it keeps in step with
+  ``results/``, ignored by git), and a link to a record, or to a study part's folder that has a ``table.md``, goes to
+  that page. A record's page is reached by links (no table of contents lists it), titled by its path where it has no
+  title.
 * A link to any other file of the repository outside ``docs/`` (a ``rows.csv``, a spec, a script) becomes a
   download of that file (MyST's ``path:`` links): the site carries a copy.
 * ``<!-- readme: START | END -->`` on a line of its own is replaced by the README's text between the line
   ``START`` and the line ``END`` (both excluded), its links rewritten to resolve from ``docs/``: the install
   and quick-start pages show the README's sections, not a copy of them.
 
-A record's links resolve from its own folder, as on the repository browser. A link to another folder has no page to
-go to: it is left as it is, and the build warns.
+A link to another folder has no page to go to: it is left as it is, and the build warns.
 """
 
 import os
 import re
-import shutil
+import tempfile
 from pathlib import Path
 
 from sphinx.application import Sphinx
@@ -27,7 +27,7 @@ LINK = re.compile(r"(!?)\[([^\]]*)\]\(([^)\s]+)\)")
 README_SECTION = re.compile(r"^<!-- readme: (.+?) \| (.+?) -->$", re.MULTILINE)
 FENCE = re.compile(r"^(```.*?^```)", re.MULTILINE | re.DOTALL)
 RECORDS = "results"
-"""The folder of the studies' records, beside ``docs/``; their pages are under the same name in ``docs/``."""
+"""The folder of the studies' records, beside ``docs/``; their pages' copies are under the same name in ``docs/``."""
 HEADING = re.compile(r"^(#{1,6}) ", re.MULTILINE)
 
 
@@ -57,8 +57,8 @@ def record_page(path: Path, srcdir: Path) -> Path | None:
 
 def rewrite_links(text: str, base: Path, page_dir: Path, srcdir: Path) -> str:
     """``text``'s links, relative to ``base``, made relative to ``page_dir``: a record's goes to its page, another
-    repository file outside ``srcdir`` becomes a download. Links inside code fences, external links and anchors are
-    kept; images are made relative to ``page_dir`` and stay images."""
+    repository file outside ``srcdir`` becomes a download, an image stays an image. Links inside code fences,
+    external links and anchors are kept."""
 
     def one(match: re.Match[str]) -> str:
         bang, label, target = match.groups()
@@ -83,22 +83,22 @@ def rewrite_links(text: str, base: Path, page_dir: Path, srcdir: Path) -> str:
 
 
 def mirror_records(srcdir: Path) -> list[Path]:
-    """Copy every record (Markdown file under the records) to its page's file under ``srcdir``, in a folder of its
-    own made afresh (a copy left by an interrupted build goes); the pages' files."""
+    """Copy every record (Markdown file under the records) to its page's file under ``srcdir`` where the copy
+    differs (the build reads again only those; a file is replaced whole, so a build beside this one never reads half
+    of it), and remove the copies whose record is gone; the pages' files."""
     records, pages = srcdir.parent / RECORDS, srcdir / RECORDS
-    remove_records(srcdir)
-    copies = []
-    for record in sorted(records.rglob("*.md")):
-        page = pages / record.relative_to(records)
-        page.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(record, page)
-        copies.append(page)
-    return copies
-
-
-def remove_records(srcdir: Path) -> None:
-    """Remove the records' pages' folder under ``srcdir``, if there is one."""
-    shutil.rmtree(srcdir / RECORDS, ignore_errors=True)
+    wanted = {pages / path.relative_to(records): path for path in sorted(records.rglob("*.md"))}
+    for page in sorted(pages.rglob("*.md")) if pages.is_dir() else ():
+        if page not in wanted:
+            page.unlink(missing_ok=True)
+    for page, record in wanted.items():
+        text = record.read_bytes()
+        if not page.is_file() or page.read_bytes() != text:
+            page.parent.mkdir(parents=True, exist_ok=True)
+            with tempfile.NamedTemporaryFile(dir=page.parent, delete=False) as part:
+                part.write(text)
+            os.replace(part.name, page)
+    return sorted(wanted)
 
 
 def consecutive_headings(text: str) -> str:
@@ -126,13 +126,8 @@ def record_source(text: str, docname: str, srcdir: Path) -> str:
 
 
 def on_builder_inited(app: Sphinx) -> None:
-    """Copy the records into their pages' files before the build looks for pages."""
+    """Bring the records' pages in step with the records before the build looks for pages."""
     mirror_records(Path(app.srcdir).resolve())
-
-
-def on_build_finished(app: Sphinx, exception: Exception | None) -> None:
-    """Remove the records' copies: outside a build the docs folder holds only the pages written for it."""
-    remove_records(Path(app.srcdir).resolve())
 
 
 def on_source_read(app: Sphinx, docname: str, source: list[str]) -> None:
@@ -152,8 +147,7 @@ def on_source_read(app: Sphinx, docname: str, source: list[str]) -> None:
 
 
 def setup(app: Sphinx) -> dict[str, bool]:
-    """Register the ``builder-inited``, ``source-read`` and ``build-finished`` handlers."""
+    """Register the ``builder-inited`` and ``source-read`` handlers."""
     app.connect("builder-inited", on_builder_inited)
-    app.connect("build-finished", on_build_finished)
     app.connect("source-read", on_source_read)
     return {"parallel_read_safe": True, "parallel_write_safe": True}

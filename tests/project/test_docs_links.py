@@ -45,24 +45,25 @@ def test_a_study_part_s_folder_goes_to_its_table_and_other_folders_and_code_fenc
     assert links.rewrite_links(text, docs, docs, docs) == text
 
 
-def test_the_records_are_copied_to_their_pages_afresh_and_removed_after(repo: Path) -> None:
+def test_the_records_pages_are_kept_in_step_with_the_records(repo: Path) -> None:
     docs = repo / "docs"
     stale = docs / "results" / "gone" / "table.md"
     stale.parent.mkdir(parents=True)
-    stale.write_text("left by an interrupted build")
+    stale.write_text("a record since removed")
     assert links.mirror_records(docs) == [docs / "results" / "study" / "table.md"]
     assert (docs / "results" / "study" / "table.md").read_text() == "| a |\n" and not stale.exists()
-    links.remove_records(docs)
-    assert not (docs / "results").exists() and (docs / "page.md").is_file()
+    (repo / "results" / "study" / "table.md").write_text("| b |\n")
+    links.mirror_records(docs)
+    assert (docs / "results" / "study" / "table.md").read_text() == "| b |\n"
 
 
-def test_a_record_s_page_is_titled_its_links_resolve_from_its_folder(repo: Path) -> None:
+def test_a_record_s_page_is_titled_with_consecutive_headings_its_links_from_its_folder(repo: Path) -> None:
     docs = repo / "docs"
-    text = "### Part\n\n[r](rows.csv) [p](../../docs/page.md) ![f](f.png)\n\n#### Sub\n"
+    text = "### Part\n\n[r](rows.csv) [t](table.md) [p](../../docs/page.md) ![f](f.png)\n\n#### Sub\n"
     page = links.record_source(text, "results/study/table", docs)
     assert page == (
-        "---\norphan: true\n---\n\n# results/study/table.md\n\n## Part\n\n"
-        "[r](path:../../../results/study/rows.csv) [p](../../page.md) ![f](../../../results/study/f.png)\n\n### Sub\n"
+        "---\norphan: true\n---\n\n# results/study/table.md\n\n## Part\n\n[r](path:../../../results/study/rows.csv) "
+        "[t](table.md) [p](../../page.md) ![f](../../../results/study/f.png)\n\n### Sub\n"
     )
     assert links.record_source("# Title\n", "results/study/table", docs).endswith("\n# Title\n")
 

@@ -27,8 +27,10 @@ def manifest_entries() -> list[str]:
 
 
 def documents() -> list[Path]:
-    """The README, the pages under ``docs/`` (not the site built into ``docs/_build/``) and the manifest."""
-    pages = [p for p in sorted((ROOT / "docs").rglob("*.md")) if "_build" not in p.relative_to(ROOT / "docs").parts]
+    """The README, the pages under ``docs/`` (not the site built into ``docs/_build/``, nor the records' pages the
+    build copies into ``docs/results/``) and the manifest."""
+    built = {"_build", "results"}
+    pages = [p for p in sorted((ROOT / "docs").rglob("*.md")) if p.relative_to(ROOT / "docs").parts[0] not in built]
     return [ROOT / "README.md", *pages, MANIFEST]
 
 

@@ -43,10 +43,11 @@ BUILT = ("docs/_build", "docs/results/")
 
 
 def docs() -> Iterator[tuple[Path, str]]:
-    """The README and the docs pages, each with its text (not the records' copies a docs build makes)."""
+    """The README and the docs pages, each with its text (not what the docs build makes: the site, the records'
+    pages)."""
     pages = [*sorted((ROOT / "docs").rglob("*.md")), *sorted((ROOT / "docs").rglob("*.rst"))]
     for path in [ROOT / "README.md", *pages]:
-        if not {"_build", "results"} & set(path.relative_to(ROOT).parts[1:2]):
+        if not path.relative_to(ROOT).as_posix().startswith(BUILT):
             yield path, path.read_text(encoding="utf-8")
 
 
