@@ -33,10 +33,7 @@ RELATIVE = re.compile(r":\w+:`~?(\.\w+(?:\.\w+)*)`")
 PLACEHOLDER = re.compile(r"[<>*{}]")
 OUTPUT = re.compile(r"--out[ =]\S+")
 """A command's output folder (``--out results/<study>/part``): what the command writes, not what is there."""
-PENDING = {
-    "envs/twodrl_envs/analysis/__init__.py": ["twodrl_envs.analysis.recording"],
-    "envs/twodrl_envs/analysis/dilemma.py": ["tests/test_nomad_dilemma.py"],
-}
+PENDING: dict[str, list[str]] = {}
 """Stale names in docstrings of files that another session is changing (issue 67); each goes once it is mended."""
 BUILT = ("docs/_build", "docs/results/")
 """Paths that the docs build makes, not the repository holds: the site, the records' pages."""

@@ -3,7 +3,7 @@
 Every figure here is an exact expectation over ``NomadOffice-v0``'s lattice semantics (eq. 11-12
 evaluations, termination on collision or goal, truncation after ``time_limit`` steps: the core's
 :class:`~twodrl_envs.nomad.core.LatticeOutcomes` and route memory), computed by
-propagating probabilities over the free cells, not by sampling; ``tests/test_nomad_dilemma.py``
+propagating probabilities over the free cells, not by sampling; ``tests/envs/test_nomad_dilemma.py``
 checks them against walks of the batched env. Three walkers:
 
 - the *eps-follower* of a route: with probability ``1 - eps`` the move that follows that route's

@@ -367,9 +367,10 @@ def check_goal_reachable(office: OfficeMap, lattice: Lattice) -> None:
         )
     if not (in_goal & lattice.reachable).any():
         inside = [office.obstacle_at(xy) for xy in lattice.cells[in_goal]]
-        if all(index is not None for index in inside):
+        obstacles = sorted({index for index in inside if index is not None})
+        if None not in inside:
             raise ValueError(
-                f"map file {office.source}: the goal {goal} lies inside obstacles{sorted(set(inside))} (every free "
+                f"map file {office.source}: the goal {goal} lies inside obstacles{obstacles} (every free "
                 "lattice cell of the goal is inside the polygon, where the robot cannot go); put the goal region on "
                 "the floor, e.g. in front of the obstacle"
             )
