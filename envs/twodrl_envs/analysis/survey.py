@@ -10,7 +10,9 @@ at each (``sb3-twodrl-survey``; extra ``sb3-twodrl[ros]``, and ``sb3-twodrl[mujo
   10 cm moves, closed loop on its localised pose as a robot with a localiser (AMCL) on the map drives waypoints:
   while the localised pose is not in the route's next cell, it commands the first move of a shortest lattice path
   there. The simulation's localiser is exact: the localised pose is the true pose. The robot stops ``k`` times at
-  each cell the first time it is localised there (``k`` readings at one pose, each with its own noise draws). A
+  each cell the first time it is localised there: ``k`` readings at one pose, each drawn as an episode of its own
+  (the stand-in robots draw some sensor errors once per episode, such as the MuJoCo robot's turret heading: a
+  cell's readings vary as they will over the episodes a policy drives; the drive's motion is one episode). A
   move that touches a wall is a bump (the robot stays where it was, as in the envs) and the next try takes
   another way; a cell of the route not reached after :data:`MAX_TRIES` moves is skipped (counted; a later pass
   may still survey it).
@@ -64,7 +66,7 @@ from twodrl_envs.analysis.bags import (
 )
 from twodrl_envs.memorable.database import SensorDatabase, import_readings
 from twodrl_envs.nomad import sensors
-from twodrl_envs.nomad.core import OfficeCore, Robot, continuous_move, episode_key, office_core
+from twodrl_envs.nomad.core import OfficeCore, Robot, continuous_move, episode_key, episode_keys, office_core
 from twodrl_envs.nomad.geometry import MOVES_CM, SHIPPED_MAPS, STEP_CM, Lattice
 from twodrl_envs.nomad.physics import MuJoCoRobot
 from twodrl_envs.nomad.realistic import RealisticModel, RealisticRobot
@@ -164,7 +166,8 @@ class Survey:
     ``(p, 2)`` (the localised pose: the simulation's localiser is exact) and the odometry ``odometry_cm``
     ``(p, 2)``; ``readings``: ``ranges_cm`` ``(n, 32)`` as the robot reports them, taken at bag time
     ``reading_s`` ``(n,)`` at pose ``pose_of`` ``(n,)`` (an index into the poses) and filed under ``cell``
-    ``(n,)``; ``route`` the planned cells; ``skipped`` the route cells given up (:data:`MAX_TRIES`).
+    ``(n,)``; ``route`` the planned cells; ``move_count`` the moves commanded, ``bumps`` those that touched a wall,
+    ``skipped`` the route cells given up (:data:`MAX_TRIES`).
     """
 
     map: str
@@ -179,7 +182,7 @@ class Survey:
     pose_of: np.ndarray
     ranges_cm: np.ndarray
     cell: np.ndarray
-    moves: int
+    move_count: int
     bumps: int
     skipped: int
 
@@ -217,7 +220,8 @@ def drive_survey(
 ) -> Survey:
     """Drive ``robot`` (:data:`ROBOTS`) along :func:`coverage_route` of ``map``, ``k`` readings per cell (module
     docstring); ``model`` is the robot's :class:`~twodrl_envs.nomad.realistic.RealisticModel` (default its env's),
-    ``seed`` draws the drive's noise (one episode key: the odometry's per-drive scale and misalignment).
+    ``seed`` draws the drive's noise (episode 0 of the seed: the odometry's per-drive scale and misalignment) and the
+    readings' (reading ``n``: episode ``n + 1``).
     ``progress(cells done, cells)`` is called after every stop."""
     if robot not in ROBOTS:
         raise ValueError(f"robot must be one of {ROBOTS}, got {robot!r}")
@@ -233,21 +237,21 @@ def drive_survey(
     physics = bot if isinstance(bot, MuJoCoRobot) else None  # moves in MuJoCo, from where it is placed
     if physics is not None:
         physics.reset_motion(truth)
-    clock, step = 0.0, 0
+    clock, step = 0.0, 0  # step: the drive's move counter
     pose_s, truths, odometries = [clock], [truth.copy()], [odometry.copy()]
     reading_s: list[float] = []
     pose_of: list[int] = []
     ranges: list[np.ndarray] = []
     filed: list[int] = []
     surveyed = np.zeros(len(lattice.cells), dtype=bool)
-    moves = bumps = skipped = 0
+    move_count = bumps = skipped = 0
     span = sensors.HIGH_CM - sensors.LOW_CM
 
     def stop(cell: int) -> None:
-        nonlocal clock, step
-        steps = step + 1 + np.arange(k)
-        step += k
-        normalised = bot.pose_readings(np.repeat(truth[None], k, axis=0), np.repeat(key, k), steps)
+        nonlocal clock
+        first = len(ranges) + 1  # reading n draws as episode n + 1 of the seed (the drive is episode 0)
+        keys = episode_keys(np.full(k, seed, dtype=np.uint64), np.arange(first, first + k))
+        normalised = bot.pose_readings(np.repeat(truth[None], k, axis=0), keys, np.ones(k, dtype=np.int64))
         for reading in sensors.LOW_CM + normalised.astype(np.float64) * span:
             clock += READING_S
             reading_s.append(clock)
@@ -277,7 +281,7 @@ def drive_survey(
                 physics.place(truth)
             shift = bot.displacement(np.array([action]), key, np.array([step]))
             target, collided, _, _ = continuous_move(office, truth[None], shift)
-            moves += 1
+            move_count += 1
             clock += MOVE_S
             if collided[0]:
                 bumps += 1
@@ -307,7 +311,7 @@ def drive_survey(
         np.array(pose_of, dtype=np.int64),
         np.array(ranges).reshape(-1, sensors.N_READINGS),
         np.array(filed, dtype=np.int64),
-        moves,
+        move_count,
         bumps,
         skipped,
     )
@@ -502,7 +506,7 @@ def main(argv: list[str] | None = None) -> None:
     )
     print(
         f"sb3-twodrl-survey: {survey.cells} of {total} cells, {len(survey.ranges_cm)} readings ({survey.k} per cell), "
-        f"{survey.moves} moves ({survey.bumps} bumps, {survey.skipped} waypoints skipped), "
+        f"{survey.move_count} moves ({survey.bumps} bumps, {survey.skipped} waypoints skipped), "
         f"{survey.pose_s[-1] / 60:.0f} min of robot time; {time.monotonic() - began:.0f} s (drive "
         f"{driven - began:.0f} s); wrote {args.out} ({_size(args.out) / 1e6:.1f} MB, {args.storage})"
     )
