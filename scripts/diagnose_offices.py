@@ -3,16 +3,21 @@
 Development offices only (generated map seeds 0-99). Four stages, each writes its numbers as JSON into ``--out``;
 ``summary.md`` is written from every stage's JSON found there, so stages can run one at a time:
 
-* ``checks``: the goal checks over training (goal rate and mean return against steps) of the runs that failed or
-  learned late without the progress signal (``results/reliability``) next to the runs of the same map and seed
-  with it (``results/every_office``, or run folders given with ``--after-run``);
-* ``paths``: the deterministic policy's path from the map's start (``--policy LABEL ALGO MAP ZIP``), drawn on
-  the map's walls with its collision and its loop;
-* ``database``: per office (``--db-maps``), a database recorded as documented (8 readings per cell, the stand-in
-  robot's model, seed 0): the per-cell spread of the readings, their aliasing, the odometry error of the
-  recording, and the stand-in robot ``NomadOfficeReal-v0`` driven 20 times along the shortest lattice path from
-  the start (the best lattice policy): its drift, the gap between its readings and the database's, its goal rate;
-* ``settings``: the starts, time limit and derived settings of every office above.
+* ``checks`` (``goal_checks.png``): the goal checks over training (goal rate and mean return against steps) of the
+  TwoDimA2C runs that failed or learned late without the progress signal (``results/reliability``) next to the
+  runs of the same map and seed with it (``results/every_office``; where it has none yet, a run folder given with
+  ``--after-run``);
+* ``paths`` (``paths.png``, ``basins.png``): the deterministic policy's path from the map's start (``--policy
+  LABEL ALGO MAP ZIP``) on the map's walls with its collision or loop, the outcome from every training start
+  cell (the goal's basin), the stochastic policy's goal rate; with ``--run``, the basin at each ``--save-freq``
+  checkpoint of a run folder;
+* ``database`` (``database_readings.png``): per office (``--db-maps``), a database recorded as documented (8
+  readings a cell, the stand-in robot's model, seed 0, cached in ``--cache``): the per-cell spread of the readings,
+  their aliasing, the recording's odometry error and bumped drives; and the stand-in robot ``NomadOfficeReal-v0``
+  driven 20 times from the start, open loop, along two shortest lattice paths (breadth-first search's and the one
+  that clears the walls the most): its goal rate, drift, and the gap between its readings and the database's;
+* ``settings``: the starts, time limit and derived settings of every office above, the runs' outcomes, and the
+  rank correlation of each task fact with the steps to learn.
 
     python scripts/diagnose_offices.py --out results/every_office/diagnosis --stages checks settings
 """
@@ -120,7 +125,8 @@ def run_folder_record(label: str, folder: Path) -> dict[str, Any]:
 def stage_checks(args: argparse.Namespace, plt: Any) -> dict[str, Any]:
     rows = read_rows(args.before_rows)
     before = read_jsonl(args.before)
-    after = read_jsonl(args.after) + [run_folder_record(label, Path(f)) for label, f in args.after_run]
+    after = read_jsonl(args.after)
+    own = [run_folder_record(label, Path(f)) for label, f in args.after_run]
     runs = chosen_runs(rows, "twoda2c")
     budgets = {(r["map"], int(r["seed"])): int(r["budget"]) for r in rows if "_2x" not in r["file"]}
     n_rows = (len(runs) + 1) // 2
@@ -131,7 +137,11 @@ def stage_checks(args: argparse.Namespace, plt: Any) -> dict[str, Any]:
         entry: dict[str, Any] = {"map": map_name, "seed": seed, "why": why}
         for name, record, style in (
             ("no progress", longest(before, map_name, seed, "twoda2c"), "C3"),
-            ("progress 0.05", longest(after, map_name, seed, "twoda2c"), "C0"),
+            (
+                "progress 0.05",
+                longest(after, map_name, seed, "twoda2c") or longest(own, map_name, seed, "twoda2c"),
+                "C0",
+            ),
         ):
             if record is None:
                 continue
@@ -337,8 +347,12 @@ def stage_paths(args: argparse.Namespace, plt: Any) -> dict[str, Any]:
     from sb3_twodrl import ALGOS
 
     results = []
-    fig, axes = plt.subplots(1, len(args.policy), figsize=(5.2 * len(args.policy), 4.8), squeeze=False)
-    for (label, algo, map_name, zip_path), ax in zip(args.policy, axes[0], strict=True):
+    cols = min(2, len(args.policy))
+    rows = (len(args.policy) + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(5.6 * cols, 5.6 * rows), squeeze=False)
+    for ax in axes.ravel()[len(args.policy) :]:
+        ax.set_axis_off()
+    for (label, algo, map_name, zip_path), ax in zip(args.policy, axes.ravel(), strict=False):
         if algo not in ALGOS:
             raise SystemExit(f"--policy: algo must be one of {sorted(ALGOS)}, got {algo!r}")
         model = ALGOS[algo].load(zip_path, device="cpu")
@@ -369,7 +383,7 @@ def stage_paths(args: argparse.Namespace, plt: Any) -> dict[str, Any]:
             f"time limit {shares['time limit']:.0%}",
             fontsize=8,
         )
-        ax.legend(fontsize=6, loc="lower right")
+        ax.legend(fontsize=6, loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=3, frameon=False)
         results.append(
             {"label": label, "algo": algo, "policy": zip_path}
             | {k: v for k, v in path.items() if k != "positions"}
@@ -400,7 +414,7 @@ def stage_basins(args: argparse.Namespace, plt: Any) -> list[dict[str, Any]]:
     from sb3_twodrl import ALGOS
 
     runs = []
-    fig, ax = plt.subplots(figsize=(6.5, 3.6))
+    fig, ax = plt.subplots(figsize=(9.5, 3.8))
     for (label, algo, map_name, folder), colour in zip(args.run, ("C3", "C0", "C1", "C2", "C4"), strict=False):
         core = office_core(dev_map(map_name))
         robot = gym.make("NomadOffice-v0", map=map_name).unwrapped.robot  # type: ignore[attr-defined]
@@ -425,7 +439,7 @@ def stage_basins(args: argparse.Namespace, plt: Any) -> list[dict[str, Any]]:
     ax.set(xlabel="training steps (millions)", ylabel="share reaching the goal", ylim=(-0.02, 1.02))
     ax.set_title("Cells from which the deterministic policy reaches the goal", fontsize=9)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
     fig.tight_layout()
     fig.savefig(args.out / "basins.png", dpi=DPI)
     plt.close(fig)
