@@ -50,10 +50,13 @@ def robot_loop() -> str:
 def test_the_doc_run_as_written_learns_its_office(tmp_path: Path) -> None:
     text = DOC.read_text()
     (tmp_path / "my_office.json").write_text(text.split("```json\n", 1)[1].split("```", 1)[0])
-    rates = []
+    rates, printed = [], []
     for command in doc_commands():
         out = subprocess.run(["bash", "-c", command], cwd=tmp_path, capture_output=True, text=True, timeout=900)
         assert out.returncode == 0, (command, out.stdout[-2000:], out.stderr[-3000:])
+        if command.startswith("sb3-twodrl-export"):
+            assert command == printed[-1]  # the doc's export line is the one its training printed
+        printed += re.findall(r"^sb3-twodrl-train: export: (.*)$", out.stdout, re.MULTILINE)
         rates += [float(r) for r in re.findall(r"^sb3-twodrl-train: goal rate ([0-9.]+)", out.stdout, re.MULTILINE)]
         if command.startswith("sb3-twodrl-enjoy"):  # the replay's own line (training prints its checks' too)
             rates += [float(r) / 100 for r in re.findall(r"^Success rate: ([0-9.]+)%", out.stdout, re.MULTILINE)]
