@@ -172,6 +172,7 @@ def test_the_command_reports_progress_and_writes_the_bag_and_the_waypoints(tmp_p
         (["--seed", "-1"], "--seed"),
         (["--robot", "ideal"], "--robot"),
         (["--map", "nowhere.json"], "--map"),
+        (["--waypoints-out", "/no_such_dir_for_a_survey/route.csv"], "--waypoints-out"),
     ],
 )
 def test_bad_flags_are_named(tmp_path: Path, capsys, argv: list[str], flag: str) -> None:

@@ -451,7 +451,12 @@ def main(argv: list[str] | None = None) -> None:
         default=None,
         help=f"built-in map name ({', '.join(SHIPPED_MAPS)}), map JSON file or generated:SIZE:SEED (default: office)",
     )
-    parser.add_argument("--robot", choices=ROBOTS, default="mujoco", help="the robot that drives (default mujoco)")
+    parser.add_argument(
+        "--robot",
+        choices=ROBOTS,
+        default="mujoco",
+        help="mujoco: NomadOfficeMuJoCo-v0's physics robot (default); artifact: NomadOfficeReal-v0's artifact model",
+    )
     parser.add_argument("--k", type=int, default=8, help="readings per cell (default 8)")
     parser.add_argument("--seed", type=int, default=0, help="the drive's noise seed (default 0)")
     parser.add_argument("--out", type=Path, required=True, help="the bag to write (a new folder)")
@@ -469,6 +474,9 @@ def main(argv: list[str] | None = None) -> None:
         parser.error(f"--seed must be >= 0, got {args.seed}")
     if args.out.exists():
         parser.error(f"--out {args.out} already exists: a survey writes a new bag")
+    for flag, path in (("--out", args.out), ("--waypoints-out", args.waypoints_out)):
+        if path is not None and not path.resolve().parent.is_dir():
+            parser.error(f"{flag}: directory {str(path.parent)!r} does not exist")
     try:
         import_rosbags()
     except ModuleNotFoundError as err:
