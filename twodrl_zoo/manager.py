@@ -76,6 +76,7 @@ class ExperimentManager(ZooExperimentManager):
         stops = given["eval_freq"] > 0 and not given["optimize_hyperparameters"]
         user_budget = given["n_timesteps"] > 0 or "n_timesteps" in (given.get("hyperparams") or {})
         self.ceiling = entry is None and stops and not user_budget  # the budget's a ceiling CEILING times as long
+        self.readings_vary = False  # the task's readings vary from visit to visit (recipe revision 2 says so)
         derived = None if entry is not None else derived_settings(given["env_id"], given.get("env_kwargs"))
         if derived is not None:
             resolved = resolve(
@@ -85,6 +86,7 @@ class ExperimentManager(ZooExperimentManager):
             given["env_kwargs"], given["eval_env_kwargs"] = resolved.env_kwargs, resolved.eval_env_kwargs
             if derived.check_episodes is not None and given["n_eval_episodes"] == ZOO_EVAL_EPISODES:
                 given["n_eval_episodes"] = derived.check_episodes
+            self.readings_vary = derived.check_episodes is not None
             print(f"sb3-twodrl: {derived.note}", flush=True)
         super().__init__(**given)
         self.entry, self.batched = entry, batched
@@ -154,6 +156,7 @@ class ExperimentManager(ZooExperimentManager):
             "learned_at": None if checks is None else checks.learned_at,
             "threshold": SUCCESS_THRESHOLD,
             "check_episodes": self.n_eval_episodes,
+            "readings_vary": self.readings_vary,
             "test_env_kwargs": self.eval_env_kwargs,
         }
         with open(os.path.join(self.save_path, CHECKS_FILE), "w") as f:

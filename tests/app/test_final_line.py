@@ -16,7 +16,7 @@ from twodrl_zoo.export import unlearned_warning
 from twodrl_zoo.manager import CHECKS_FILE
 
 
-def _record(rates: list[float], learned: bool = False, episodes: int = 20) -> dict:
+def _record(rates: list[float], learned: bool = False, episodes: int = 20, vary: bool = False) -> dict:
     checks = [{"timesteps": 25_000 * (i + 1), "goal_rate": r, "mean_return": -1.0} for i, r in enumerate(rates)]
     return {
         "checks": checks,
@@ -25,6 +25,7 @@ def _record(rates: list[float], learned: bool = False, episodes: int = 20) -> di
         "num_timesteps": 25_000 * len(rates),
         "threshold": 0.8,
         "check_episodes": episodes,
+        "readings_vary": vary,
     }
 
 
@@ -43,6 +44,11 @@ def test_one_verdict_that_never_contradicts_itself(
     text = verdict(final, _record(rates, learned))
     assert text.startswith(starts) and "\n" not in text
     assert not any(word in text for word in never)
+
+
+def test_a_policy_learned_on_recorded_readings_is_not_promised_to_the_robot() -> None:
+    text = verdict(1.0, _record([0.9, 1.0], learned=True, vary=True))
+    assert text.startswith("learned on the recorded readings") and "robot" in text and "may be lower" in text
 
 
 def test_export_warns_only_of_a_run_whose_checks_never_passed(tmp_path: Path) -> None:

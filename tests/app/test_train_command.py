@@ -21,7 +21,10 @@ from twodrl_zoo.zoo import _dict_options
         (["--env", "NomadOfice-v0"], "env 'NomadOfice-v0' is not registered; did you mean 'NomadOffice-v0'?"),
         (["--env", "NomadOffice-v0", "--env-kwargs", "map:three_rooms.json"], """map:'"my_office.json"'"""),
         (["--env", "NomadOffice-v0", "--env-kwargs", "map:'nope.json'"], "nope.json does not exist"),
-        (["--env", "NomadOffice-v0", "-n", "-1000"], "-n/--n-timesteps must be a positive number of steps, got '-1000'"),
+        (
+            ["--env", "NomadOffice-v0", "-n", "-1000"],
+            "-n/--n-timesteps must be a positive number of steps, got '-1000'",
+        ),
         (["--env", "NomadOffice-v0", "--n-timesteps=0"], "must be a positive number of steps, got '0'"),
         (
             ["--env", "NomadOfficeMemorable-v0", "--env-kwargs", "database:'gone.npz'"],
