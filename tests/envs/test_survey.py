@@ -133,7 +133,7 @@ def test_the_bag_holds_the_robot_topics_in_metres_and_imports_to_the_direct_data
         np.testing.assert_allclose(positions, survey.odometry_cm[survey.pose_of], rtol=0, atol=1e-6)
 
 
-def test_a_survey_without_noise_imports_to_the_recording_placed_on_the_cells(tmp_path: Path) -> None:
+def test_a_survey_without_noise_imports_to_record_databases_recording(tmp_path: Path) -> None:
     """With a model whose readings depend on the pose only, the survey's bag imports to recording.py's direct
     recording (the same readings at the same cells); with noise the draws differ (other keys, other drift)."""
     direct = record_database(2, map=MAP, model=STILL)
