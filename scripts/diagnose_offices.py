@@ -616,11 +616,12 @@ def stage_database(args: argparse.Namespace, plt: Any) -> dict[str, Any]:
         title="aliasing: o database readings, s the robot's",
     )
     axes[2].set(xlabel=moves, ylabel="share of recording drives", title="recording drives that bumped (re-driven)")
-    axes[3].set(xlabel=along, ylabel="median |true - odometry| (cm)", title="the robot's drift")
+    axes[3].set(xlabel=along, ylabel="median |true - odometry| (cm)", title="the robot's drift (drives not ended yet)")
     axes[4].set(
         xlabel=along,
         ylabel="reading to cell mean / within-cell median",
         title="gap robot - database (1: like a recorded reading)",
+        yscale="log",
     )
     axes[5].set(
         xlabel=moves,
