@@ -846,6 +846,11 @@ def write_summary(out: Path) -> None:
     if "settings" in stage:
         parts += [
             "## Starts, time limit, derived settings (simulator path)\n",
+            "The settings the recipe derives now (revision 2: the progress signal on every size); the runs of "
+            "`results/reliability` (columns B and 2B) had revision 1's, the same without the signal on M and S. "
+            "`starts_as_far_share`: the share of the training start cells (uniform over the reachable cells) at least "
+            "as far from the goal as the map's start; `goal_value_at_start`: gamma to the power of the shortest "
+            "path; `turns`: turns of breadth-first search's shortest path.\n",
             table(
                 stage["settings"]["offices"],
                 [
