@@ -36,7 +36,6 @@ from twodrl_zoo.vec_env import make_test_env, make_train_env
 
 ENV = "NomadOffice-v0"
 TEST_EPISODES = 20
-FIELDS = ("map", "size", "moves", "algo", "seed", "learned", "train_s", "train_cpu_s", "steps", "goal_rate", "budget")
 
 
 class LearnedStop(BaseCallback):
