@@ -1,6 +1,6 @@
 """Why some development offices fail (issue 64 part 1, issue 66 part 2): figures and a summary of measured numbers.
 
-Development offices only (generated map seeds 0-99). Four stages, each writes its numbers as JSON into ``--out``;
+Development offices only (generated map seeds 0-99). Five stages, each writes its numbers as JSON into ``--out``;
 ``summary.md`` is written from every stage's JSON found there, so stages can run one at a time:
 
 * ``checks`` (``goal_checks.png``): the goal checks over training (goal rate and mean return against steps) of the
@@ -11,6 +11,9 @@ Development offices only (generated map seeds 0-99). Four stages, each writes it
   LABEL ALGO MAP ZIP``) on the map's walls with its collision or loop, the outcome from every training start
   cell (the goal's basin), the stochastic policy's goal rate; with ``--run``, the basin at each ``--save-freq``
   checkpoint of a run folder;
+* ``robot`` (``robot_paths.png``): a policy trained on a database (``--robot-policy LABEL ALGO MAP DATABASE ZIP``):
+  its deterministic path on the database env from the start, with its moves that clear the walls by less than
+  5 cm, and its 20 trials on the stand-in robot ``NomadOfficeReal-v0`` from there;
 * ``database`` (``database_readings.png``): per office (``--db-maps``), a database recorded as documented (8
   readings a cell, the stand-in robot's model, seed 0, cached in ``--cache``): the per-cell spread of the readings,
   their aliasing, the recording's odometry error and bumped drives; and the stand-in robot ``NomadOfficeReal-v0``
@@ -44,7 +47,7 @@ from twodrl_envs.nomad.sensors import IR_MAX_CM, N_SONAR
 from twodrl_zoo.hyperparams import derived_settings, task_facts
 from twodrl_zoo.recipe import size_class
 
-STAGES = ("checks", "paths", "database", "settings")
+STAGES = ("checks", "paths", "robot", "database", "settings")
 LATE = 0.5
 """A run "learned late" when it stopped as learned after more than this share of its budget."""
 INTO_GOAL = 10
@@ -344,6 +347,10 @@ def median_or_none(values: np.ndarray) -> float | None:
 
 
 def stage_paths(args: argparse.Namespace, plt: Any) -> dict[str, Any]:
+    return {"policies": policy_paths(args, plt), "runs": stage_basins(args, plt) if args.run else []}
+
+
+def policy_paths(args: argparse.Namespace, plt: Any) -> list[dict[str, Any]]:
     from sb3_twodrl import ALGOS
 
     results = []
@@ -397,7 +404,7 @@ def stage_paths(args: argparse.Namespace, plt: Any) -> dict[str, Any]:
     fig.tight_layout()
     fig.savefig(args.out / "paths.png", dpi=DPI)
     plt.close(fig)
-    return {"policies": results, "runs": stage_basins(args, plt) if args.run else []}
+    return results
 
 
 def checkpoints(folder: Path) -> list[tuple[int, Path]]:
@@ -444,6 +451,65 @@ def stage_basins(args: argparse.Namespace, plt: Any) -> list[dict[str, Any]]:
     fig.savefig(args.out / "basins.png", dpi=DPI)
     plt.close(fig)
     return runs
+
+
+def stage_robot(args: argparse.Namespace, plt: Any) -> dict[str, Any]:
+    """A database-trained policy (``--robot-policy``): its deterministic path on its database env from the start
+    (the lattice path it learned, with its tight moves) and :data:`TRIALS` trials on the stand-in robot from there."""
+    from sb3_twodrl import ALGOS
+
+    results = []
+    fig, axes = plt.subplots(1, len(args.robot_policy), figsize=(6 * len(args.robot_policy), 5.6), squeeze=False)
+    for (label, algo, map_name, database, zip_path), ax in zip(args.robot_policy, axes[0], strict=True):
+        model = ALGOS[algo].load(zip_path, device="cpu")
+        core = office_core(dev_map(map_name))
+        derived = derived_settings("NomadOfficeMemorable-v0", {"map": map_name, "database": database})
+        test = {} if derived is None else derived.eval_env_kwargs
+        env = gym.make("NomadOfficeMemorable-v0", map=map_name, database=database, **test)
+        lattice, collided, goal = episode(env, model, True, 0)
+        env.close()
+        cells = np.array([core.lattice.index(xy) for xy in lattice])
+        slack = move_slack(core, cells[:-1], cells[1:]) if len(cells) > 1 else np.zeros(0)
+        robot = gym.make("NomadOfficeReal-v0", map=map_name, **test)
+        trials = [episode(robot, model, True, trial) for trial in range(TRIALS)]
+        robot.close()
+        draw_office(ax, core)
+        for k, (xy, hit, _) in enumerate(trials):
+            ax.plot(xy[:, 0], xy[:, 1], "-", color="0.45", lw=0.6, alpha=0.7, label="robot trials" if k == 0 else None)
+            if hit:
+                ax.plot(*xy[-1], "X", color="C3", ms=6, mec="k", mew=0.4)
+        ax.plot([], [], "X", color="C3", ms=6, mec="k", mew=0.4, label="robot collision")
+        ax.plot(lattice[:, 0], lattice[:, 1], "-", color="C0", lw=1.6, label="its path on the database")
+        tight = lattice[1:][slack < TIGHT_CM]
+        ax.plot(tight[:, 0], tight[:, 1], "o", color="C1", ms=4, label=f"moves clearing walls by < {TIGHT_CM:.0f} cm")
+        goals = sum(g for _, _, g in trials)
+        hits = [len(xy) - 1 for xy, hit, _ in trials if hit]
+        outcome = "goal" if goal else "collision" if collided else "time limit"
+        ax.set_title(
+            f"{label}\n{short(map_name)} on its database: {outcome}"
+            f" in {len(lattice) - 1} moves, {int(np.sum(slack < TIGHT_CM))} tight; stand-in robot: goal {goals} of "
+            f"{TRIALS}, {len(hits)} collisions",
+            fontsize=8,
+        )
+        ax.legend(fontsize=6, loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=2, frameon=False)
+        results.append(
+            {
+                "label": label,
+                "map": map_name,
+                "policy": zip_path,
+                "database_outcome": outcome,
+                "database_moves": len(lattice) - 1,
+                "tight_moves": int(np.sum(slack < TIGHT_CM)),
+                "min_slack_cm": float(slack.min()) if len(slack) else None,
+                "robot_goal_rate": goals / TRIALS,
+                "robot_collisions": len(hits),
+                "robot_collision_moves": sorted(set(hits)),
+            }
+        )
+    fig.tight_layout()
+    fig.savefig(args.out / "robot_paths.png", dpi=DPI)
+    plt.close(fig)
+    return {"policies": results}
 
 
 # --- the database path's readings --------------------------------------------------------------------------------
@@ -806,6 +872,26 @@ def write_summary(out: Path) -> None:
             table(points, ["label", "map", "steps", "cells_goal", "cells_as_far_goal", "from_start"]),
             "",
         ]
+    if "robot" in stage:
+        parts += [
+            "## A database-trained policy on the stand-in robot (robot_paths.png)\n",
+            table(
+                stage["robot"]["policies"],
+                [
+                    "label",
+                    "map",
+                    "database_outcome",
+                    "database_moves",
+                    "tight_moves",
+                    "min_slack_cm",
+                    "robot_goal_rate",
+                    "robot_collisions",
+                    "robot_collision_moves",
+                    "policy",
+                ],
+            ),
+            "",
+        ]
     if "database" in stage:
         parts += [
             "## Database readings and the stand-in robot (database_readings.png)\n",
@@ -917,6 +1003,14 @@ def main(argv: list[str] | None = None) -> None:
         metavar=("LABEL", "ALGO", "MAP", "FOLDER"),
         help="a run folder with --save-freq checkpoints: the cells reaching the goal over training",
     )
+    parser.add_argument(
+        "--robot-policy",
+        nargs=5,
+        action="append",
+        default=[],
+        metavar=("LABEL", "ALGO", "MAP", "DATABASE", "ZIP"),
+        help="a policy trained on a database: its path there and its trials on the stand-in robot",
+    )
     parser.add_argument("--db-maps", type=dev_map, nargs="*", default=[])
     parser.add_argument("--cache", type=Path, default=Path("/tmp/diagnose_offices"), help="recorded databases")
     args = parser.parse_args(argv)
@@ -928,7 +1022,7 @@ def main(argv: list[str] | None = None) -> None:
     import matplotlib.pyplot as plt
 
     for name in args.stages:
-        if name == "paths" and not args.policy:
+        if (name == "paths" and not args.policy) or (name == "robot" and not args.robot_policy):
             continue
         if name == "database" and not args.db_maps:
             continue
@@ -936,6 +1030,8 @@ def main(argv: list[str] | None = None) -> None:
             result = stage_checks(args, plt)
         elif name == "paths":
             result = stage_paths(args, plt)
+        elif name == "robot":
+            result = stage_robot(args, plt)
         elif name == "database":
             result = stage_database(args, plt)
         else:
