@@ -1014,6 +1014,12 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--db-maps", type=dev_map, nargs="*", default=[])
     parser.add_argument("--cache", type=Path, default=Path("/tmp/diagnose_offices"), help="recorded databases")
     args = parser.parse_args(argv)
+    for flag, entries in (("--policy", args.policy), ("--run", args.run), ("--robot-policy", args.robot_policy)):
+        for entry in entries:
+            try:
+                dev_map(entry[2])
+            except argparse.ArgumentTypeError as err:
+                parser.error(f"{flag}: {err}")
     args.out.mkdir(parents=True, exist_ok=True)
     args.cache.mkdir(parents=True, exist_ok=True)
     import matplotlib
