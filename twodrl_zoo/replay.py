@@ -33,13 +33,8 @@ from typing import Any
 import numpy as np
 
 from twodrl_envs.analysis.bags import (
-    IR_FRAME,
-    IR_RING_FRAME,
     IR_TOPIC,
     ODOMETRY_TOPIC,
-    POSE_FRAMES,
-    SONAR_FRAME,
-    SONAR_RING_FRAME,
     SONAR_TOPIC,
     STORAGES,
     header,
@@ -47,6 +42,7 @@ from twodrl_envs.analysis.bags import (
     read_bag,
     ring_topics,
 )
+from twodrl_envs.analysis.cli import add_bag_arguments, bag_options
 from twodrl_envs.nomad.core import office_core
 
 MOVES = ("north", "east", "south", "west")  # the Nomad envs' actions 0, 1, 2, 3
@@ -365,39 +361,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--out", type=Path, required=True, help="the bag to write (a new folder)")
     parser.add_argument("--overwrite", action="store_true", help="replace --out if it is a bag already")
     parser.add_argument("--map", default=None, help="the map the policy was exported for (default: office)")
-    parser.add_argument(
-        "--sonar-topic",
-        default=SONAR_TOPIC,
-        help=f"sonar topics, a pattern with {{i}} (16 Range topics) or one LaserScan topic (default {SONAR_TOPIC})",
-    )
-    parser.add_argument("--ir-topic", default=IR_TOPIC, help=f"infrared topics, as --sonar-topic (default {IR_TOPIC})")
-    parser.add_argument(
-        "--odom-topic", default=ODOMETRY_TOPIC, help=f"the nav_msgs/msg/Odometry topic (default {ODOMETRY_TOPIC})"
-    )
-    parser.add_argument(
-        "--pose-topic",
-        default=None,
-        help="where the readings were taken: an Odometry, PoseStamped or PoseWithCovarianceStamped topic, "
-        "read instead of --odom-topic (default: --odom-topic)",
-    )
-    parser.add_argument(
-        "--sonar-frame",
-        default=None,
-        help=f"the sonar messages' frame ids, a pattern with {{i}} for Range topics (default {SONAR_FRAME}, "
-        f"or {SONAR_RING_FRAME} for a LaserScan)",
-    )
-    parser.add_argument(
-        "--ir-frame",
-        default=None,
-        help=f"the infrared messages' frame ids, as --sonar-frame (default {IR_FRAME}, or {IR_RING_FRAME})",
-    )
-    parser.add_argument(
-        "--pose-frame",
-        choices=POSE_FRAMES,
-        default="start",
-        help="start: odometry of a robot switched on at the map's start facing north; map: the map's frame "
-        "(default start)",
-    )
+    add_bag_arguments(parser)
     parser.add_argument("--action-topic", default=ACTION_TOPIC, help=f"the moves' topic (default {ACTION_TOPIC})")
     parser.add_argument("--storage", choices=STORAGES, default="mcap", help="--out's storage (default mcap)")
     args = parser.parse_args(argv)
@@ -419,16 +383,10 @@ def main(argv: list[str] | None = None) -> None:
             exported,
             args.out,
             map=args.map,
-            sonar=args.sonar_topic,
-            ir=args.ir_topic,
-            odometry=args.odom_topic,
-            pose=args.pose_topic,
-            pose_frame=args.pose_frame,
-            sonar_frame=args.sonar_frame,
-            ir_frame=args.ir_frame,
             action_topic=args.action_topic,
             storage=args.storage,
             overwrite=args.overwrite,
+            **bag_options(args),
         )
     except (ValueError, ModuleNotFoundError) as err:  # each names the bag, or the flag of what is wrong with it
         parser.exit(2, f"{parser.prog}: error: {err}\n")

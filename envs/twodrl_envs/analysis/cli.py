@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import importlib.util
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -110,19 +111,64 @@ def _import(args: argparse.Namespace) -> SensorDatabase:
     """The database of the command's CSV or bag import, complete or not (the command reports missing cells)."""
     if args.from_csv is not None:
         return import_csv(args.from_csv, map=args.map, require_all_cells=False, per_cell=args.k)
-    return import_bag(
-        args.from_bag,
-        map=args.map,
-        sonar=args.sonar_topic,
-        ir=args.ir_topic,
-        odometry=args.odom_topic,
-        pose=args.pose_topic,
-        pose_frame=args.pose_frame,
-        sonar_frame=args.sonar_frame,
-        ir_frame=args.ir_frame,
-        per_cell=args.k,
-        require_all_cells=False,
+    return import_bag(args.from_bag, map=args.map, per_cell=args.k, require_all_cells=False, **bag_options(args))
+
+
+def add_bag_arguments(parser: argparse.ArgumentParser, note: str = "") -> None:
+    """The options that name a bag's topics and frames (``--sonar-topic`` ... ``--pose-frame``), as
+    ``sb3-twodrl-record-database --from-bag`` and ``sb3-twodrl-replay-bag`` take them; ``note`` opens each help."""
+    parser.add_argument(
+        "--sonar-topic",
+        default=SONAR_TOPIC,
+        help=f"{note}sonar topics, a pattern with {{i}} (16 sensor_msgs/msg/Range topics) or one LaserScan topic "
+        f"(default {SONAR_TOPIC})",
     )
+    parser.add_argument(
+        "--ir-topic", default=IR_TOPIC, help=f"{note}infrared topics, as --sonar-topic (default {IR_TOPIC})"
+    )
+    parser.add_argument(
+        "--odom-topic",
+        default=ODOMETRY_TOPIC,
+        help=f"{note}the nav_msgs/msg/Odometry topic (default {ODOMETRY_TOPIC})",
+    )
+    parser.add_argument(
+        "--pose-topic",
+        default=None,
+        help=f"{note}where the readings were taken: an Odometry, PoseStamped or PoseWithCovarianceStamped topic, "
+        "read instead of --odom-topic (which the bag then need not hold; default: --odom-topic)",
+    )
+    parser.add_argument(
+        "--sonar-frame",
+        default=None,
+        help=f"{note}the sonar messages' frame ids, a pattern with {{i}} for Range topics (default {SONAR_FRAME}, "
+        f"or {SONAR_RING_FRAME} for a LaserScan)",
+    )
+    parser.add_argument(
+        "--ir-frame",
+        default=None,
+        help=f"{note}the infrared messages' frame ids, as --sonar-frame (default {IR_FRAME}, or {IR_RING_FRAME})",
+    )
+    parser.add_argument(
+        "--pose-frame",
+        choices=POSE_FRAMES,
+        default="start",
+        help=f"{note}start: the pose is odometry of a robot switched on at the map's start facing north (x "
+        "forward, y left); map: the pose is in the map's frame, x east, y north (default start)",
+    )
+
+
+def bag_options(args: argparse.Namespace) -> dict[str, Any]:
+    """The bag reader's keyword arguments (:func:`~twodrl_envs.analysis.bags.read_bag`) from
+    :func:`add_bag_arguments`' options."""
+    return {
+        "sonar": args.sonar_topic,
+        "ir": args.ir_topic,
+        "odometry": args.odom_topic,
+        "pose": args.pose_topic,
+        "pose_frame": args.pose_frame,
+        "sonar_frame": args.sonar_frame,
+        "ir_frame": args.ir_frame,
+    }
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -151,42 +197,7 @@ def main(argv: list[str] | None = None) -> None:
     )
     parser.add_argument("--from-csv", type=Path, default=None, help="import a CSV log instead of recording")
     parser.add_argument("--from-bag", type=Path, default=None, help="import a ROS 2 bag (folder or file) instead")
-    parser.add_argument(
-        "--sonar-topic",
-        default=SONAR_TOPIC,
-        help="bag: sonar topics, a pattern with {i} (16 sensor_msgs/msg/Range topics) or one LaserScan topic "
-        f"(default {SONAR_TOPIC})",
-    )
-    parser.add_argument(
-        "--ir-topic", default=IR_TOPIC, help=f"bag: infrared topics, as --sonar-topic (default {IR_TOPIC})"
-    )
-    parser.add_argument(
-        "--odom-topic", default=ODOMETRY_TOPIC, help=f"bag: the nav_msgs/msg/Odometry topic (default {ODOMETRY_TOPIC})"
-    )
-    parser.add_argument(
-        "--pose-topic",
-        default=None,
-        help="bag: where the readings were taken: an Odometry, PoseStamped or PoseWithCovarianceStamped topic, "
-        "read instead of --odom-topic (which the bag then need not hold; default: --odom-topic)",
-    )
-    parser.add_argument(
-        "--sonar-frame",
-        default=None,
-        help=f"bag: the sonar messages' frame ids, a pattern with {{i}} for Range topics (default {SONAR_FRAME}, "
-        f"or {SONAR_RING_FRAME} for a LaserScan)",
-    )
-    parser.add_argument(
-        "--ir-frame",
-        default=None,
-        help=f"bag: the infrared messages' frame ids, as --sonar-frame (default {IR_FRAME}, or {IR_RING_FRAME})",
-    )
-    parser.add_argument(
-        "--pose-frame",
-        choices=POSE_FRAMES,
-        default="start",
-        help="bag: start: the pose is odometry of a robot switched on at the map's start facing north (x forward, "
-        "y left); map: the pose is in the map's frame, x east, y north (default start)",
-    )
+    add_bag_arguments(parser, "bag: ")
     parser.add_argument("--allow-missing", action="store_true", help="imports: allow reachable cells without readings")
     parser.add_argument(
         "--coverage-png",
