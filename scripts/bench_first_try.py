@@ -283,6 +283,57 @@ def restart_table(
     return "\n".join(lines) + "\n"
 
 
+def compare_table(new: list[dict[str, str]], old: list[dict[str, str]], longer: list[dict[str, str]] = ()) -> str:
+    """The runs of ``new`` beside those of ``old`` with the same map, algorithm and seed (the ``old`` runs that did
+    not learn continued to twice the budget in ``longer``): per algorithm, runs at goal rate >= 0.8 (``old``
+    within its budget and within twice it) and the median steps of the runs that learned; then every pair. Only
+    maps whose every ``new`` run of an algorithm finished both seeds count (as many seeds as ``old`` has)."""
+    continued = {(r["map"], r["algo"], r["seed"]): r for r in longer}
+    before = {(r["map"], r["algo"], r["seed"]): r for r in old}
+
+    def learned(r: dict[str, str]) -> bool:
+        return float(r["goal_rate"]) >= SUCCESS_THRESHOLD
+
+    def within_2b(r: dict[str, str]) -> tuple[bool, int]:
+        more = continued.get((r["map"], r["algo"], r["seed"]))
+        if learned(r) or more is None:
+            return learned(r), int(r["steps"])
+        return learned(more), int(more["steps"])
+
+    seeds = {
+        (r["map"], r["algo"]): {x["seed"] for x in old if (x["map"], x["algo"]) == (r["map"], r["algo"])} for r in new
+    }
+    pairs = [
+        (r, before[(r["map"], r["algo"], r["seed"])])
+        for r in new
+        if (r["map"], r["algo"], r["seed"]) in before
+        and seeds[(r["map"], r["algo"])] <= {x["seed"] for x in new if (x["map"], x["algo"]) == (r["map"], r["algo"])}
+    ]
+    lines = [
+        "| algo | runs | new: learned | new: median steps, learned | old: learned in B | old: learned in 2B "
+        "| old: median steps, learned in 2B |",
+        "|" + " --- |" * 7,
+    ]
+    for algo in sorted({r["algo"] for r, _ in pairs}, reverse=True):
+        group = [(r, o) for r, o in pairs if r["algo"] == algo]
+        steps_new = [int(r["steps"]) for r, _ in group if learned(r)]
+        old_2b = [within_2b(o) for _, o in group]
+        lines.append(
+            f"| {algo} | {len(group)} | {len(steps_new)}/{len(group)} | {np.median(steps_new):,.0f} | "
+            f"{sum(learned(o) for _, o in group)}/{len(group)} | {sum(ok for ok, _ in old_2b)}/{len(group)} | "
+            f"{np.median([s for ok, s in old_2b if ok]):,.0f} |"
+        )
+    lines += ["", "| map | algo | seed | new goal rate | new steps | old goal rate | old steps | old in 2B: steps |"]
+    lines.append("|" + " --- |" * 8)
+    for r, o in pairs:
+        ok, steps = within_2b(o)
+        lines.append(
+            f"| {r['map']} | {r['algo']} | {r['seed']} | {float(r['goal_rate']):.2f} | {int(r['steps']):,} | "
+            f"{float(o['goal_rate']):.2f} | {int(o['steps']):,} | {f'{steps:,}' if ok else 'not learned'} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
 def plot(rows: list[dict[str, str]], path: Path) -> None:
     """Wall seconds of the whole command against the office's shortest path, per arm; offices below 0.8 hollow."""
     import matplotlib
@@ -333,8 +384,18 @@ def main() -> None:
     parser.add_argument("--table", type=Path, nargs="+", help="print the table of rows CSVs and exit")
     parser.add_argument("--plot", type=Path, help="with --table: also draw wall seconds against shortest path here")
     parser.add_argument("--restarts", type=Path, nargs="+", help="print the restart analysis of --checks files")
+    parser.add_argument("--compare", type=Path, nargs="+", help="print these rows beside --against's, run by run")
+    parser.add_argument("--against", type=Path, nargs="*", default=[], help="with --compare: the rows to compare with")
     parser.add_argument("--longer", type=Path, nargs="*", default=[], help="with --restarts: the runs to 2B")
     args = parser.parse_args()
+    if args.compare is not None:
+
+        def read(paths: list[Path]) -> list[dict[str, str]]:
+            return [row for path in paths for row in csv.DictReader(path.open(newline=""))]
+
+        longer = [p for p in args.longer]
+        print(compare_table(read(args.compare), read(args.against), read(longer)), end="")
+        return
     if args.restarts is not None:
         records = [json.loads(line) for path in args.restarts for line in path.read_text().splitlines()]
         longer = [json.loads(line) for path in args.longer for line in path.read_text().splitlines()]
