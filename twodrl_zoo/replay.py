@@ -39,8 +39,7 @@ from twodrl_envs.analysis.bags import (
     STORAGES,
     header,
     import_rosbags,
-    read_bag,
-    ring_topics,
+    read_bag_readings,
 )
 from twodrl_envs.analysis.cli import add_bag_arguments, bag_options
 from twodrl_envs.nomad.core import office_core
@@ -136,32 +135,6 @@ def _load_torchscript(path: Path) -> tuple[Any, dict[str, Any] | None]:
     return module.eval(), json.loads(extra["meta.json"]) if extra["meta.json"] else None
 
 
-def _reading_stamps(path: Path, sonar: str, ir: str, pose: str) -> tuple[list[int], list[tuple[str, float, float]]]:
-    """The bag time (ns) of each reading :func:`~twodrl_envs.analysis.bags.read_bag` gives (the message that completed
-    it) and the pose it was taken at, as the pose topic says it: ``(frame_id, x, y)`` in metres."""
-    rosbags = import_rosbags()
-    sensors = {t for pattern in (sonar, ir) for t in ring_topics(pattern, "")}
-    stamps: list[int] = []
-    poses: list[tuple[str, float, float]] = []
-    with rosbags.highlevel.AnyReader([path], default_typestore=_typestore()) as reader:
-        wanted = [c for c in reader.connections if c.topic in sensors or c.topic == pose]
-        fresh: set[str] = set()
-        last: tuple[str, float, float] | None = None
-        for connection, stamp, raw in reader.messages(connections=wanted):
-            if connection.topic == pose:
-                msg = reader.deserialize(raw, connection.msgtype)
-                inner = msg.pose.pose if hasattr(msg.pose, "pose") else msg.pose
-                last = (msg.header.frame_id, float(inner.position.x), float(inner.position.y))
-                continue
-            fresh.add(connection.topic)
-            if fresh == sensors:
-                fresh.clear()
-                if last is not None:
-                    stamps.append(stamp)
-                    poses.append(last)
-    return stamps, poses
-
-
 def _typestore() -> Any:
     typesys = import_rosbags().typesys
     return typesys.get_typestore(typesys.Stores.ROS2_HUMBLE)
@@ -244,7 +217,7 @@ def replay_bag(
         raise ValueError(f"action topic must be a topic name such as {ACTION_TOPIC!r}, got {action_topic!r}")
     _check_out(out, bag, overwrite)
     exported = policy if isinstance(policy, ExportedPolicy) else load_policy(policy)
-    positions, readings, stats = read_bag(
+    read = read_bag_readings(
         bag,
         map=map,
         sonar=sonar,
@@ -255,13 +228,11 @@ def replay_bag(
         sonar_frame=sonar_frame,
         ir_frame=ir_frame,
     )
-    raw = np.concatenate([readings, positions], axis=1) if exported.width == 34 else readings
+    raw = np.concatenate([read.readings, read.positions], axis=1) if exported.width == 34 else read.readings
     actions = exported.act(raw)
     if actions.shape != (len(raw),) or not np.isin(actions, range(len(MOVES))).all():
         raise ValueError(f"policy {str(exported.path)!r} gave actions outside 0-3 (or of shape {actions.shape})")
-    stamps, poses = _reading_stamps(bag, sonar, ir, odometry if pose is None else pose)
-    if len(stamps) != len(actions):  # the rule of a reading is read_bag's; a difference is a bug here
-        raise RuntimeError(f"replay found {len(stamps)} readings in {bag}, read_bag {len(actions)}")
+    stamps, poses, stats = read.stamps, read.poses, read.stats
     partial = out.parent / f".{out.name}.partial"
     shutil.rmtree(partial, ignore_errors=True)
     partial.mkdir()

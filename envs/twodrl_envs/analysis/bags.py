@@ -275,7 +275,29 @@ def _position(msg: Any) -> np.ndarray:
     return np.array([pose.position.x, pose.position.y])
 
 
-def read_bag(
+def read_bag(path: str | Path, **options: Any) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
+    """Positions ``(n, 2)`` cm in ``map``'s frame, readings ``(n, 32)`` cm and statistics of a bag's readings: those
+    of :func:`read_bag_readings` (``options`` are its keyword arguments)."""
+    read = read_bag_readings(path, **options)
+    return read.positions, read.readings, read.stats
+
+
+@dataclass(frozen=True)
+class BagReadings:
+    """A bag's readings (:func:`read_bag_readings`), with where and when each was taken."""
+
+    positions: np.ndarray
+    """``(n, 2)`` cm in the map's frame."""
+    readings: np.ndarray
+    """``(n, 32)`` cm, saturated to the sensors' ranges."""
+    stats: dict[str, Any]
+    stamps: list[int]
+    """Each reading's bag time (ns): that of the message that completed it."""
+    poses: list[tuple[str, float, float]]
+    """Each reading's pose as its topic says it: ``(frame_id, x, y)``, metres."""
+
+
+def read_bag_readings(
     path: str | Path,
     *,
     map: str | Path | None = None,
@@ -286,8 +308,9 @@ def read_bag(
     pose_frame: str = "start",
     sonar_frame: str | None = None,
     ir_frame: str | None = None,
-) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
-    """Positions ``(n, 2)`` cm in ``map``'s frame, readings ``(n, 32)`` cm and statistics of a bag's readings.
+) -> BagReadings:
+    """The readings of a bag: positions ``(n, 2)`` cm in ``map``'s frame, readings ``(n, 32)`` cm, statistics, and
+    each reading's bag time and pose message (:class:`BagReadings`).
 
     ``sonar`` / ``ir``: a topic pattern with ``{i}`` (16 ``Range`` topics) or one ``LaserScan`` topic;
     ``sonar_frame`` / ``ir_frame``: their frame ids (:func:`sensor_rings`); ``odometry``: the ``Odometry`` topic,
@@ -341,12 +364,15 @@ def read_bag(
         current = np.full(N_SONAR + N_IR, np.nan)
         fresh = np.zeros(N_SONAR + N_IR, dtype=bool)
         last_pose: np.ndarray | None = None
+        last_frame = ""
         positions, readings, before_pose, poses = [], [], 0, 0
-        for connection, _, raw in reader.messages(connections=wanted):
+        stamps: list[int] = []
+        taken: list[tuple[str, float, float]] = []
+        for connection, stamp, raw in reader.messages(connections=wanted):
             msg = reader.deserialize(raw, connection.msgtype)
             topic = connection.topic
             if topic == pose_topic:
-                last_pose = _position(msg)
+                last_pose, last_frame = _position(msg), msg.header.frame_id
                 poses += 1
                 if topic not in slots:
                     continue
@@ -361,6 +387,8 @@ def read_bag(
                     continue
                 positions.append(_to_map(last_pose, frame, start))
                 readings.append(current.copy())
+                stamps.append(stamp)
+                taken.append((last_frame, float(last_pose[0]), float(last_pose[1])))
     finally:
         reader.close()
     if poses == 0:
@@ -372,7 +400,7 @@ def read_bag(
             f"bag {name}: no complete reading (every one of the 32 sensors after a pose on {pose_topic!r})"
         )
     stats = {"readings": len(readings), "readings_before_first_pose": before_pose, "poses": poses}
-    return np.array(positions), _saturate(np.array(readings), LOW_CM, HIGH_CM), stats
+    return BagReadings(np.array(positions), _saturate(np.array(readings), LOW_CM, HIGH_CM), stats, stamps, taken)
 
 
 def import_bag(
