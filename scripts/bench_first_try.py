@@ -30,6 +30,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
@@ -371,6 +372,9 @@ def main() -> None:
     parser.add_argument("--map-seeds", nargs="*", type=int, default=[], help="generated map seeds")
     parser.add_argument("--algos", nargs="+", default=["twoda2c"])
     parser.add_argument("--seeds", nargs="*", type=int, default=[], help="training seeds (default: none, drawn)")
+    parser.add_argument(
+        "--repeats", type=int, default=1, help="runs per map and arm with drawn seeds (rows already in --out count)"
+    )
     parser.add_argument("--budget-factor", type=float, help="-n this times the derived budget (default: not given)")
     parser.add_argument("--checks", type=Path, help="JSON lines file to append each run's goal_checks.json to")
     parser.add_argument("--database", action="store_true", help="docs/own_office.md's database path")
@@ -411,19 +415,23 @@ def main() -> None:
             plot(rows, args.plot)
         return
     maps = list(args.maps) + [f"generated:{s}:{seed}" for seed in args.map_seeds for s in args.sizes]
-    done = set()
+    if args.repeats < 1 or (args.repeats > 1 and args.seeds):
+        parser.error(f"--repeats {args.repeats}: a positive count, with drawn seeds only (no --seeds)")
+    done: Counter[tuple[str, str, str | None]] = Counter()
     if args.out.exists():
         with args.out.open(newline="") as f:
-            done = {(r["map"], r["algo"], r["seed"] if args.seeds else None) for r in csv.DictReader(f)}
+            done.update((r["map"], r["algo"], r["seed"] if args.seeds else None) for r in csv.DictReader(f))
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
     cpu = next((line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo") if "model name" in line), "")
     cpu = cpu or platform.processor()
     fields = DATABASE_FIELDS if args.database else FIELDS
     for map_ in maps:
         for algo in args.algos:
-            for seed in args.seeds or [None]:
+            for seed in args.seeds or [None] * args.repeats:
                 label = f"{algo}-database" if args.database else algo
-                if (map_, label, None if seed is None else str(seed)) in done:
+                key = (map_, label, None if seed is None else str(seed))
+                if done[key] > 0:
+                    done[key] -= 1
                     continue
                 if args.database:
                     row = run_database(map_, commit, cpu, algo, args.train_args.split(), args.checks)
