@@ -85,20 +85,20 @@ def unmatched(readme: str) -> list[str]:
 
 def test_every_number_the_readme_quotes_is_in_the_table_it_links() -> None:
     readme = README.read_text()
-    assert sum(len(quoted(b)) for title in SECTIONS for b in blocks(section(readme, title))) >= 40
+    assert sum(len(quoted(b)) for title in SECTIONS for b in blocks(section(readme, title))) >= 25
     assert unmatched(readme) == []
 
 
 @pytest.mark.parametrize(
     ("old", "new"),
     [
-        ("-0.036 [-0.057, -0.016]", "-0.036 [-0.057, -0.015]"),  # one digit of an interval
+        ("-0.041 [-0.078, -0.005]", "-0.041 [-0.078, -0.004]"),  # one digit of an interval
         ("7/10 [0.40, 0.89]", "7/10 [0.40, 0.90]"),
         ("| 36/40; 32/40 |", "| 36/40; 33/40 |"),
         ("+0.0020 [+0.0006, +0.0034]", "+0.0020 [+0.0006, +0.0035]"),
-        ("| -7.9 |", "| +7.9 |"),  # the sign
+        ("| -7.9; 0.875 |", "| +7.9; 0.875 |"),  # the sign
         ("0.94 [0.91, 0.97]", "0.94 [0.91, 0.98]"),
-        ("in at least 80% of", "in at least 75% of"),  # a percentage no table has
+        ("| 0.494 |", "| 49.4% |"),  # a percentage no table has
     ],
 )
 def test_a_changed_number_fails(old: str, new: str) -> None:
