@@ -2,6 +2,7 @@
 
 import inspect
 from collections.abc import Callable
+from dataclasses import fields
 from typing import Any
 
 import gymnasium as gym
@@ -12,6 +13,7 @@ from gymnasium.envs.registration import load_env_creator
 import twodrl_envs  # noqa: F401  (registers the IDs)
 from twodrl_envs.memorable.database import SensorDatabase
 from twodrl_envs.memorable.recording import record_database
+from twodrl_envs.nomad.episode import EnvOptions
 from twodrl_envs.nomad.realistic import RealisticModel
 from twodrl_zoo.vec_env import has_batched_env, make_train_env
 
@@ -67,12 +69,20 @@ OPTION_VALUES: dict[str, Callable[[str | None], Any]] = {
     "database": _database,
     "starts": lambda _: "uniform",
     "progress": lambda _: 0.05,
+    "max_episode_steps": lambda _: 25,
 }
 
 
 def _options(env_id: str) -> list[str]:
+    """The constructor's own keywords, with :class:`EnvOptions`' fields for its ``**options``."""
     creator = load_env_creator(gym.spec(env_id).entry_point)
-    return [name for name in inspect.signature(creator).parameters if name != "self"]
+    names = []
+    for parameter in inspect.signature(creator).parameters.values():
+        if parameter.kind is inspect.Parameter.VAR_KEYWORD:
+            names += [option.name for option in fields(EnvOptions)]
+        elif parameter.name != "self":
+            names.append(parameter.name)
+    return names
 
 
 CASES = [(env_id, option) for env_id in NOMAD_IDS for option in _options(env_id)]

@@ -11,14 +11,15 @@ from __future__ import annotations
 
 import functools
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from twodrl_envs import MAX_EPISODE_STEPS
 from twodrl_envs.memorable.database import SensorDatabase, load_database
 from twodrl_envs.nomad import sensors
 from twodrl_envs.nomad.batched import BatchedNomadOffice
 from twodrl_envs.nomad.core import OfficeCore, Robot, counter_word, office_core
+from twodrl_envs.nomad.episode import EnvOptions
 from twodrl_envs.nomad.office import NomadOfficeEnv
 
 RECORDED = "recorded:"
@@ -100,18 +101,11 @@ class NomadOfficeMemorableEnv(NomadOfficeEnv):
     """
 
     def __init__(
-        self,
-        map: str | Path | None = None,
-        *,
-        database: str | Path | SensorDatabase | None = None,
-        observe_odometry: bool = True,
-        render_mode: str | None = None,
-        observation: str = "sensors",
-        starts: str = "map",
-        progress: float = 0.0,
+        self, map: str | Path | None = None, *, database: str | Path | SensorDatabase | None = None, **options: Any
     ) -> None:
+        checked = EnvOptions.of(type(self), options)
         core = office_core(map)
-        self._setup(core, ReplayRobot(core, database), observe_odometry, render_mode, observation, starts, progress)
+        self._setup(core, ReplayRobot(core, database), checked)
 
 
 class BatchedNomadOfficeMemorable(BatchedNomadOffice):
@@ -123,15 +117,8 @@ class BatchedNomadOfficeMemorable(BatchedNomadOffice):
         map: str | Path | None = None,
         *,
         database: str | Path | SensorDatabase | None = None,
-        observe_odometry: bool = True,
-        render_mode: str | None = None,
-        max_episode_steps: int = MAX_EPISODE_STEPS,
-        observation: str = "sensors",
-        starts: str = "map",
-        progress: float = 0.0,
+        **options: Any,
     ) -> None:
+        checked = EnvOptions.of(type(self), options)
         core = office_core(map)
-        robot = ReplayRobot(core, database)
-        self._setup(
-            num_envs, core, robot, observe_odometry, render_mode, max_episode_steps, observation, starts, progress
-        )
+        self._setup(num_envs, core, ReplayRobot(core, database), checked)

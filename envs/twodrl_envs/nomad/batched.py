@@ -23,16 +23,8 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from twodrl_envs import MAX_EPISODE_STEPS
-from twodrl_envs.nomad.core import (
-    ROUTE_LABELS,
-    IdealRobot,
-    OfficeCore,
-    Robot,
-    episode_keys,
-    office_core,
-    remembered_route,
-)
-from twodrl_envs.nomad.episode import RENDER_MODES, Episodes, base_key, non_negative, sensor_noise_model
+from twodrl_envs.nomad.core import ROUTE_LABELS, IdealRobot, OfficeCore, Robot, office_core, remembered_route
+from twodrl_envs.nomad.episode import RENDER_MODES, Counters, EnvOptions, Episodes, non_negative, sensor_noise_model
 from twodrl_envs.nomad.sensors import NoiseModel
 
 _ROUTE_NAMES = np.array(ROUTE_LABELS, dtype=object)
@@ -49,8 +41,11 @@ class BatchedNomadOffice(VectorEnv):
 
     With ``step_sd_cm`` / ``slip_sd_cm`` the robots leave the lattice: each sub-env draws its move
     noise from its own generator, seeded as a single env's ``np_random``, in the single env's order.
-    The episode's start, moves, observation and ``info`` are :class:`~twodrl_envs.nomad.episode.Episodes`'
-    (:attr:`episodes`), as the single env's.
+    The options besides ``num_envs``, ``map`` and the robot's are :class:`~twodrl_envs.nomad.episode.EnvOptions`'
+    (:attr:`options`), the single env's, with ``max_episode_steps`` :data:`~twodrl_envs.MAX_EPISODE_STEPS` unless
+    given. The episode's start, moves, observation and ``info`` are
+    :class:`~twodrl_envs.nomad.episode.Episodes`' (:attr:`episodes`), and its counters and time limit
+    :class:`~twodrl_envs.nomad.episode.Counters`', as the single env's.
     """
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": list(RENDER_MODES)}
@@ -60,48 +55,28 @@ class BatchedNomadOffice(VectorEnv):
         num_envs: int,
         map: str | Path | None = None,
         *,
-        observe_odometry: bool = True,
         sensor_noise: bool | NoiseModel | None = None,
         step_sd_cm: float = 0.0,
         slip_sd_cm: float = 0.0,
-        render_mode: str | None = None,
-        max_episode_steps: int = MAX_EPISODE_STEPS,
-        observation: str = "sensors",
-        starts: str = "map",
-        progress: float = 0.0,
+        **options: Any,
     ) -> None:
+        checked = EnvOptions.of(type(self), options)
         core = office_core(map)
         noise = sensor_noise_model(sensor_noise)
         step_sd, slip_sd = non_negative("step_sd_cm", step_sd_cm), non_negative("slip_sd_cm", slip_sd_cm)
-        robot = IdealRobot(core, noise, step_sd, slip_sd, self._generators)
-        self._setup(
-            num_envs, core, robot, observe_odometry, render_mode, max_episode_steps, observation, starts, progress
-        )
+        self._setup(num_envs, core, IdealRobot(core, noise, step_sd, slip_sd, self._generators), checked)
 
-    def _setup(
-        self,
-        num_envs: int,
-        core: OfficeCore,
-        robot: Robot,
-        observe_odometry: bool,
-        render_mode: str | None,
-        max_episode_steps: int,
-        observation: str,
-        starts: str,
-        progress: float,
-    ) -> None:
+    def _setup(self, num_envs: int, core: OfficeCore, robot: Robot, options: EnvOptions) -> None:
         """Spaces and state of ``num_envs`` ``robot``s in ``core``'s office (every variant's constructor ends here)."""
         if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
             raise ValueError(f"num_envs must be a positive int, got {num_envs!r}")
-        if isinstance(max_episode_steps, bool) or not isinstance(max_episode_steps, int) or max_episode_steps < 1:
-            raise ValueError(f"max_episode_steps must be a positive int, got {max_episode_steps!r}")
-        name = type(self).__name__
-        self.episodes = Episodes(core, robot, observe_odometry, render_mode, observation, starts, progress, name)
-        self.core, self.robot, self.render_mode = core, robot, render_mode
-        self.observation, self.observe_odometry = self.episodes.observation, observe_odometry
-        self.starts, self.progress = starts, self.episodes.progress
+        self.episodes = Episodes(core, robot, options, type(self).__name__)
+        self.core, self.robot, self.options, self.render_mode = core, robot, options, options.render_mode
+        self.observation, self.observe_odometry = options.observation, options.observe_odometry
+        self.starts, self.progress = options.starts, options.progress
         self.num_envs = int(num_envs)
-        self.max_episode_steps = max_episode_steps
+        limit = options.max_episode_steps
+        self.max_episode_steps = MAX_EPISODE_STEPS if limit is None else limit
         self.single_observation_space = self.episodes.observation_space
         self.single_action_space = spaces.Discrete(4)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
@@ -110,10 +85,7 @@ class BatchedNomadOffice(VectorEnv):
         self._all.flags.writeable = False
         self._cell = np.full(self.num_envs, core.start_cell)
         self._route = np.zeros(self.num_envs, dtype=np.int8)
-        self._t = np.zeros(self.num_envs, dtype=np.int64)
-        self._episode = np.zeros(self.num_envs, dtype=np.int64)
-        self._base = np.zeros(self.num_envs, dtype=np.uint64)
-        self._key = np.zeros(self.num_envs, dtype=np.uint64)
+        self._counters = Counters(self.num_envs, self.max_episode_steps)
         # robot centres (cm) and their dead-reckoned odometry (off the lattice; on it, the centres)
         self._pos = np.repeat(np.array(core.office.start, dtype=np.float64)[None], self.num_envs, axis=0)
         self._odo = self._pos.copy()
@@ -138,27 +110,25 @@ class BatchedNomadOffice(VectorEnv):
                 raise ValueError(f"seed must be an int or {self.num_envs} seeds, got {len(seeds)}")
         self._np_random, self._np_random_seed = seeding.np_random(seeds[0])
         self._rngs = [self._np_random] + [seeding.np_random(s)[0] for s in seeds[1:]]
-        for i, rng in enumerate(self._rngs):
-            self._base[i] = base_key(rng)
-        self._episode[:] = 0
-        self._key = episode_keys(self._base, self._episode)
+        self._counters.seed(self._rngs)
         self._restart(self._all)
         obs = self._observe(self._all)
         zeros = np.zeros(self.num_envs, dtype=bool)
         return obs, self._info(np.zeros(self.num_envs), zeros, zeros)
 
     def _restart(self, rows: np.ndarray) -> None:
-        """Put the robots ``rows`` (bool mask) at the start of a new episode (as ``starts`` says)."""
-        start = self.episodes.start(self._key[rows])
+        """Count a new episode of the robots ``rows`` (bool mask) and put them at its start (as ``starts`` says)."""
+        self._counters.begin(rows)
+        start = self.episodes.start(self._counters.keys[rows])
         self._cell[rows], self._route[rows] = start.cells, start.routes
         self._pos[rows] = self._odo[rows] = start.positions
-        self._t[rows] = 0
         if self.render_mode is not None:
             for i in np.flatnonzero(rows):
                 self._trajectories[i] = [tuple(self._pos[i])]
 
     def _observe(self, rows: np.ndarray) -> np.ndarray:
-        return self.episodes.observe(rows, self._cell, self._pos, self._odo, self._key, self._t)
+        counters = self._counters
+        return self.episodes.observe(rows, self._cell, self._pos, self._odo, counters.keys, counters.steps)
 
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """Move every robot (eq. 11-12 evaluations); finished robots restart in the same call."""
@@ -166,13 +136,14 @@ class BatchedNomadOffice(VectorEnv):
         if actions.shape != (self.num_envs,) or not np.all((actions >= 0) & (actions < 4)):
             raise ValueError(f"actions must be {self.num_envs} integers in 0..3, got {actions!r}")
         actions = actions.astype(np.intp)
-        self._t += 1
-        move = self.episodes.move(self._cell, self._pos, self._odo, actions, self._key, self._t)
+        counters = self._counters
+        counters.steps += 1
+        move = self.episodes.move(self._cell, self._pos, self._odo, actions, counters.keys, counters.steps)
         self._cell, self._pos, self._odo = move.cells, move.positions, move.odometry
         collided, goal, rewards, punishment = move.collided, move.goal, move.reward, move.punishment
         self._route = remembered_route(self._route, move.code).astype(np.int8)
         terminated = collided | goal
-        truncated = (self._t >= self.max_episode_steps) & ~terminated
+        truncated = counters.truncated(terminated)
         obs = self._observe(self._all)
         info = self._info(punishment, collided, goal)
         if self.render_mode is not None:
@@ -181,8 +152,6 @@ class BatchedNomadOffice(VectorEnv):
         done = terminated | truncated
         if done.any():
             info["final_obs"], info["_final_obs"] = obs.copy(), done
-            self._episode[done] += 1
-            self._key[done] = episode_keys(self._base[done], self._episode[done])
             self._restart(done)
             obs[done] = self._observe(done)
         return obs, rewards, terminated, truncated, info

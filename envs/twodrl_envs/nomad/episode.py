@@ -1,19 +1,27 @@
-"""An office episode written once, for one robot or N: the options' checks, the start, a move, the route memory,
-the observation, ``info`` and the frame.
+"""An office episode written once, for one robot or N: the options and their checks, the counters and the time
+limit, the start, a move, the route memory, the observation, ``info`` and the frame.
 
-:class:`Episodes` applies :mod:`twodrl_envs.nomad.core`'s rules to the robots of an env in arrays ``(n, ...)``;
-:class:`~twodrl_envs.nomad.batched.BatchedNomadOffice` holds N robots' state and calls it, and
-:class:`~twodrl_envs.nomad.office.NomadOfficeEnv` holds one robot's. On the lattice the single env takes a Python
-fast path (:meth:`Episodes.start_one`, :meth:`Episodes.observe_one`, :attr:`LatticeOutcomes.rows
-<twodrl_envs.nomad.core.LatticeOutcomes.rows>`), measured faster than arrays of one row and tested equal to them.
+:class:`EnvOptions` are the options every Nomad env takes (``gym.make(id, **options)``), checked once.
+:class:`Episodes` applies :mod:`twodrl_envs.nomad.core`'s rules to the robots of an env in arrays ``(n, ...)``,
+and :class:`Counters` counts their episodes and steps and truncates them at the time limit, as MiniGrid's
+``MiniGridEnv.step()`` counts and truncates; :class:`~twodrl_envs.nomad.batched.BatchedNomadOffice` holds N
+robots' state and calls them, and :class:`~twodrl_envs.nomad.office.NomadOfficeEnv` holds one robot's. On the
+lattice the single env takes a Python fast path (:meth:`Episodes.start_one`, :meth:`Episodes.observe_one`,
+:class:`Counter`, :attr:`LatticeOutcomes.rows <twodrl_envs.nomad.core.LatticeOutcomes.rows>`), measured faster
+than arrays of one row and tested equal to them.
 """
 
 from __future__ import annotations
 
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import InitVar, dataclass, fields
 from typing import Any, NamedTuple
 
+import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from gymnasium.vector import VectorEnv
 
 from twodrl_envs.nomad import sensors
 from twodrl_envs.nomad.core import (
@@ -21,6 +29,8 @@ from twodrl_envs.nomad.core import (
     Robot,
     check_starts,
     continuous_move,
+    episode_key,
+    episode_keys,
     evaluations,
     route_code_at,
     start_draw,
@@ -46,19 +56,14 @@ def sensor_noise_model(value: object) -> NoiseModel | None:
     raise TypeError(f"sensor_noise must be a bool, None or a NoiseModel, got {type(value).__name__}: {value!r}")
 
 
-def check_observation(observation: object, lattice: bool, env_name: str) -> str:
-    """``observation`` if it is one of :data:`OBSERVATIONS` that ``env_name`` can give, else ``ValueError``.
-
-    ``"cell"`` needs motion on the lattice (``lattice``): elsewhere the robot's pose is no cell.
-    """
-    if not isinstance(observation, str) or observation not in OBSERVATIONS:
-        raise ValueError(f"observation must be one of {OBSERVATIONS}, got {observation!r}")
+def check_observation(observation: str, lattice: bool, env_name: str) -> None:
+    """``ValueError`` if ``env_name`` cannot give ``observation``: ``"cell"`` needs motion on the lattice
+    (``lattice``), elsewhere the robot's pose is no cell."""
     if observation == "cell" and not lattice:
         raise ValueError(
             f"observation='cell' needs a robot that moves on the lattice, but {env_name} moves it off the lattice "
             "(use observation='sensors', or the ideal model without step_sd_cm / slip_sd_cm)"
         )
-    return observation
 
 
 def non_negative(name: str, value: object) -> float:
@@ -68,15 +73,63 @@ def non_negative(name: str, value: object) -> float:
     return float(value)
 
 
-def check_progress(progress: object, robot: Robot) -> float:
-    """``progress`` (the weight of the progress signal, :class:`~twodrl_envs.nomad.core.LatticeOutcomes`) as a
-    float if it is a finite number >= 0 and, when > 0, ``robot`` moves on the lattice; else ``ValueError``."""
-    weight = non_negative("progress", progress)
-    if weight > 0.0 and not robot.on_lattice:
+def check_progress(progress: float, robot: Robot) -> None:
+    """``ValueError`` if ``progress`` (the weight of the progress signal,
+    :class:`~twodrl_envs.nomad.core.LatticeOutcomes`) is > 0 and ``robot`` does not move on the lattice."""
+    if progress > 0.0 and not robot.on_lattice:
         raise ValueError(
             f"progress={progress!r} needs a robot that moves on the lattice ({type(robot).__name__} does not)"
         )
-    return weight
+
+
+@dataclass(frozen=True)
+class EnvOptions:
+    """The options every Nomad env takes besides ``map`` and its robot's (``gym.make(id, **options)``, and
+    ``gym.make_vec`` for the batched envs), checked here, once, when made (:meth:`of`).
+
+    ``observe_odometry``: the normalised odometry after the 32 readings; ``render_mode``: None or one of the
+    env's ``metadata["render_modes"]`` (``render_modes``, not an option); ``observation``: one of
+    :data:`OBSERVATIONS`; ``starts``: one of :data:`~twodrl_envs.nomad.core.STARTS`; ``progress``: the weight of
+    the progress signal (a float >= 0); ``max_episode_steps``: the env's own time limit, the step that reaches it
+    truncating an episode that did not terminate (:class:`Counters`). ``None``: a single env has none of its own
+    (``gym.make`` takes ``max_episode_steps`` and wraps the ID's registered limit, or that one, around it:
+    ``TimeLimit``, which flags the same step), a batched env the registered one
+    (:data:`~twodrl_envs.MAX_EPISODE_STEPS`, which ``gym.make_vec`` passes). The checks that depend on the robot
+    (``"cell"`` and ``progress`` need the lattice) are :class:`Episodes`'.
+    """
+
+    observe_odometry: bool = True
+    render_mode: str | None = None
+    observation: str = "sensors"
+    starts: str = "map"
+    progress: float = 0.0
+    max_episode_steps: int | None = None
+    render_modes: InitVar[Sequence[str]] = RENDER_MODES
+
+    def __post_init__(self, render_modes: Sequence[str]) -> None:
+        if not isinstance(self.observe_odometry, bool):
+            raise TypeError(f"observe_odometry must be a bool, got {self.observe_odometry!r}")
+        if self.render_mode is not None and self.render_mode not in render_modes:
+            raise ValueError(f"render_mode must be None or one of {list(render_modes)}, got {self.render_mode!r}")
+        if not isinstance(self.observation, str) or self.observation not in OBSERVATIONS:
+            raise ValueError(f"observation must be one of {OBSERVATIONS}, got {self.observation!r}")
+        check_starts(self.starts)
+        object.__setattr__(self, "progress", non_negative("progress", self.progress))
+        limit = self.max_episode_steps
+        if limit is not None and (isinstance(limit, bool) or not isinstance(limit, int) or limit < 1):
+            raise ValueError(f"max_episode_steps must be a positive int, got {limit!r}")
+
+    @classmethod
+    def of(cls, env: type[gym.Env] | type[VectorEnv], options: Mapping[str, Any]) -> EnvOptions:
+        """The checked ``options`` of an ``env`` class's constructor (its render modes its ``metadata``'s).
+
+        :raises TypeError: naming a keyword that is no option, as Python names an unexpected keyword argument
+        """
+        names = {option.name for option in fields(cls)}
+        for name in options:
+            if name not in names:
+                raise TypeError(f"{env.__name__}.__init__() got an unexpected keyword argument {name!r}")
+        return cls(**options, render_modes=tuple(env.metadata["render_modes"]))
 
 
 def observation_space(core: OfficeCore, observation: str, observe_odometry: bool) -> spaces.Space:
@@ -114,38 +167,77 @@ class Move(NamedTuple):
     punishment: np.ndarray
 
 
-class Episodes:
-    """The episodes of ``robot`` in ``core``'s office with an env's checked options (the single and batched envs').
+class Counters:
+    """The counters of ``n`` robots' episodes, arrays ``(n,)``, kept as MiniGrid's ``MiniGridEnv.step()`` keeps its
+    step count: ``base`` keys drawn from each robot's seeded generator, ``episode`` numbers since the seeding, the
+    episode's noise ``keys`` (derived from both) and the ``steps`` taken in it; ``limit`` is the time limit
+    (``inf``: none). :class:`Counter` is one robot's, in Python values."""
 
-    ``observe_odometry``, ``render_mode``, ``observation``, ``starts`` and ``progress`` are the envs' options of
-    those names (their defaults the envs'), checked here in that order; ``env_name`` names the env in errors.
+    def __init__(self, n: int, max_episode_steps: int | None) -> None:
+        self.base = np.zeros(n, dtype=np.uint64)
+        self.episode = np.full(n, -1, dtype=np.int64)
+        self.keys = np.zeros(n, dtype=np.uint64)
+        self.steps = np.zeros(n, dtype=np.int64)
+        self.limit = math.inf if max_episode_steps is None else max_episode_steps
+
+    def seed(self, rngs: Sequence[np.random.Generator]) -> None:
+        """Draw each robot's base key from its seeded generator ``rngs[i]``; its next episode is its first."""
+        self.base[:] = [base_key(rng) for rng in rngs]
+        self.episode[:] = -1
+
+    def begin(self, rows: np.ndarray) -> None:
+        """Count a new episode of the robots ``rows`` (a bool mask): its number, its noise key, no steps yet."""
+        self.episode[rows] += 1
+        self.keys[rows] = episode_keys(self.base[rows], self.episode[rows])
+        self.steps[rows] = 0
+
+    def truncated(self, terminated: np.ndarray) -> np.ndarray:
+        """Gymnasium's ``truncated`` after a step (counted in :attr:`steps`): the step that reaches the time limit
+        truncates an episode that did not terminate."""
+        return (self.steps >= self.limit) & ~terminated
+
+
+class Counter:
+    """:class:`Counters` of one robot, in Python values (a single env's step is mostly call overhead); not seeded
+    until :meth:`seed`."""
+
+    __slots__ = ("base", "episode", "key", "limit", "step")
+
+    def __init__(self, max_episode_steps: int | None) -> None:
+        self.base, self.episode, self.key, self.step = 0, -1, 0, 0
+        self.limit = math.inf if max_episode_steps is None else max_episode_steps
+
+    def seed(self, rng: np.random.Generator) -> None:
+        """:meth:`Counters.seed` of one robot."""
+        self.base, self.episode = base_key(rng), -1
+
+    def begin(self) -> None:
+        """:meth:`Counters.begin` of one robot."""
+        self.episode += 1
+        self.key, self.step = episode_key(self.base, self.episode), 0
+
+    def truncated(self, terminated: bool) -> bool:
+        """:meth:`Counters.truncated` of one robot."""
+        return self.step >= self.limit and not terminated
+
+
+class Episodes:
+    """The episodes of ``robot`` in ``core``'s office with an env's checked ``options`` (the single and batched
+    envs'); ``env_name`` names the env in errors. Here are the checks of the options that depend on the robot
+    (``observation="cell"`` and ``progress`` > 0 need the lattice).
     Odometry off the lattice is dead reckoning: the start plus the commanded moves that did not collide.
     """
 
-    def __init__(
-        self,
-        core: OfficeCore,
-        robot: Robot,
-        observe_odometry: bool = True,
-        render_mode: str | None = None,
-        observation: str = "sensors",
-        starts: str = "map",
-        progress: float = 0.0,
-        env_name: str = "the env",
-    ) -> None:
-        if not isinstance(observe_odometry, bool):
-            raise TypeError(f"observe_odometry must be a bool, got {observe_odometry!r}")
-        if render_mode is not None and render_mode not in RENDER_MODES:
-            raise ValueError(f"render_mode must be None or one of {list(RENDER_MODES)}, got {render_mode!r}")
-        self.core, self.robot = core, robot
-        self.observe_odometry, self.render_mode = observe_odometry, render_mode
-        self.observation = check_observation(observation, robot.on_lattice, env_name)
-        self.starts = check_starts(starts)
-        self.progress = check_progress(progress, robot)
+    def __init__(self, core: OfficeCore, robot: Robot, options: EnvOptions, env_name: str = "the env") -> None:
+        check_observation(options.observation, robot.on_lattice, env_name)
+        check_progress(options.progress, robot)
+        self.core, self.robot, self.options = core, robot, options
+        self.observe_odometry, self.observation = options.observe_odometry, options.observation
+        self.starts, self.progress = options.starts, options.progress
         self.outcomes = robot.outcomes(self.progress) if robot.on_lattice else None
-        self.start_cells = robot.start_cells if starts == "uniform" else np.zeros(0, dtype=np.intp)
+        self.start_cells = robot.start_cells if self.starts == "uniform" else np.zeros(0, dtype=np.intp)
         self._start_cells = self.start_cells.tolist()
-        self.observation_space = observation_space(core, observation, observe_odometry)
+        self.observation_space = observation_space(core, self.observation, self.observe_odometry)
         self.has_routes = core.office.has_routes
         self.info_keys = tuple(key for key in INFO_KEYS if key != "route" or self.has_routes)
         # set here, not by cached_property: an attribute added later slows every attribute look-up (the fast path's)

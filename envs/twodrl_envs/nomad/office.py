@@ -14,16 +14,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from twodrl_envs.nomad.core import (
-    ROUTE_LABELS,
-    IdealRobot,
-    OfficeCore,
-    Robot,
-    episode_key,
-    office_core,
-    remembered_route,
-)
-from twodrl_envs.nomad.episode import Episodes, base_key, non_negative, sensor_noise_model
+from twodrl_envs.nomad.core import ROUTE_LABELS, IdealRobot, OfficeCore, Robot, office_core, remembered_route
+from twodrl_envs.nomad.episode import Counter, EnvOptions, Episodes, non_negative, sensor_noise_model
 from twodrl_envs.nomad.sensors import NoiseModel
 from twodrl_envs.nomad.task import task_facts
 
@@ -55,8 +47,14 @@ class NomadOfficeEnv(gym.Env):
     dead-reckoned (commanded) position, as wheel odometry does.
 
     The robot is :attr:`robot` (:class:`~twodrl_envs.nomad.core.Robot`): the realistic and replay envs
-    are this env with another robot. The episode's start, moves, observation and ``info`` are
-    :class:`~twodrl_envs.nomad.episode.Episodes`' (:attr:`episodes`), on the lattice by its Python fast path.
+    are this env with another robot. The options besides ``map`` and the robot's are
+    :class:`~twodrl_envs.nomad.episode.EnvOptions`' (:attr:`options`), checked there. The episode's start, moves,
+    observation and ``info`` are :class:`~twodrl_envs.nomad.episode.Episodes`' (:attr:`episodes`), on the lattice
+    by its Python fast path; its counters and the time limit a :class:`~twodrl_envs.nomad.episode.Counter`'s: with
+    ``max_episode_steps`` the step that reaches it returns ``truncated=True`` unless the episode terminated, as the
+    batched env's sub-envs do; without it (``gym.make`` takes ``max_episode_steps``), the time limit is the
+    ``TimeLimit`` wrapper's that ``gym.make`` puts around the env (the registered 300 steps, or the one given),
+    which flags the same step, and a terminating one too.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
@@ -65,20 +63,16 @@ class NomadOfficeEnv(gym.Env):
         self,
         map: str | Path | None = None,
         *,
-        observe_odometry: bool = True,
         sensor_noise: bool | NoiseModel | None = None,
         step_sd_cm: float = 0.0,
         slip_sd_cm: float = 0.0,
-        render_mode: str | None = None,
-        observation: str = "sensors",
-        starts: str = "map",
-        progress: float = 0.0,
+        **options: Any,
     ) -> None:
+        checked = EnvOptions.of(type(self), options)
         core = office_core(map)
         noise = sensor_noise_model(sensor_noise)
         step_sd, slip_sd = non_negative("step_sd_cm", step_sd_cm), non_negative("slip_sd_cm", slip_sd_cm)
-        robot = IdealRobot(core, noise, step_sd, slip_sd, self._generators)
-        self._setup(core, robot, observe_odometry, render_mode, observation, starts, progress)
+        self._setup(core, IdealRobot(core, noise, step_sd, slip_sd, self._generators), checked)
 
     def _generators(self) -> tuple[np.random.Generator]:
         """The generator the ideal robot's move noise draws from: this env's ``np_random``."""
@@ -100,30 +94,17 @@ class NomadOfficeEnv(gym.Env):
         own = {key: value for key, value in options.items() if key not in ("starts", "max_episode_steps")}
         return task_facts(cls(**own).robot)
 
-    def _setup(
-        self,
-        core: OfficeCore,
-        robot: Robot,
-        observe_odometry: bool,
-        render_mode: str | None,
-        observation: str,
-        starts: str,
-        progress: float,
-    ) -> None:
+    def _setup(self, core: OfficeCore, robot: Robot, options: EnvOptions) -> None:
         """Spaces and state of an env of ``robot`` in ``core``'s office (every variant's constructor ends here)."""
-        name = type(self).__name__
-        self.episodes = Episodes(core, robot, observe_odometry, render_mode, observation, starts, progress, name)
-        self.core, self.robot = core, robot
-        self.observation, self.observe_odometry = self.episodes.observation, observe_odometry
-        self.render_mode, self.starts, self.progress = render_mode, starts, self.episodes.progress
+        self.episodes = Episodes(core, robot, options, type(self).__name__)
+        self.core, self.robot, self.options = core, robot, options
+        self.observation, self.observe_odometry = options.observation, options.observe_odometry
+        self.render_mode, self.starts, self.progress = options.render_mode, options.starts, options.progress
         self.observation_space = self.episodes.observation_space
         self.action_space = spaces.Discrete(4)
         self._outcomes = self.episodes.outcomes.rows if self.episodes.outcomes is not None else []
         self._observe_one, self._info_of = self.episodes.observe_one, self.episodes.info  # bound once: the fast path
-        self._base_key = 0
-        self._episode = -1
-        self._key = 0
-        self._step = 0
+        self._counter = Counter(options.max_episode_steps)
         self._cell = core.start_cell
         self._pos = np.array(core.office.start, dtype=np.float64)
         self._odo = self._pos.copy()
@@ -131,7 +112,7 @@ class NomadOfficeEnv(gym.Env):
         self._trajectory: list[tuple[float, float]] = []
 
     def _counters(self) -> tuple[np.ndarray, np.ndarray]:
-        return np.array([self._key], dtype=np.uint64), np.array([self._step], dtype=np.int64)
+        return np.array([self._counter.key], dtype=np.uint64), np.array([self._counter.step], dtype=np.int64)
 
     def _pose_observation(self) -> np.ndarray:
         return self.episodes.observe_poses(self._pos[None], self._odo[None], *self._counters())[0]
@@ -142,38 +123,37 @@ class NomadOfficeEnv(gym.Env):
     ) -> tuple[np.ndarray | int, dict[str, Any]]:
         """Start an episode at ``options["position"] = (x_cm, y_cm)``, else as ``starts`` says (the map's start)."""
         super().reset(seed=seed)
-        if seed is not None or self._episode < 0:
-            self._base_key = base_key(self.np_random)
-            self._episode = -1
-        self._episode += 1
-        self._key = episode_key(self._base_key, self._episode)
-        self._step = 0
+        counter = self._counter
+        if seed is not None or counter.episode < 0:
+            counter.seed(self.np_random)
+        counter.begin()
         options = {} if options is None else options
         if not isinstance(options, dict) or set(options) - {"position"}:
             raise ValueError(f"options may only contain 'position', got {options!r}")
         if "position" in options:
             self._pos, self._cell, self._route = self.episodes.start_state(options["position"])
         else:
-            self._pos, self._cell, self._route = self.episodes.start_one(self._key)
+            self._pos, self._cell, self._route = self.episodes.start_one(counter.key)
         self._odo = self._pos.copy() if self._cell < 0 else self.core.lattice.cells[self._cell]
         self._trajectory = [tuple(self._pos)]
-        observation = self._observe_one(self._cell, self._key, 0) if self._cell >= 0 else self._pose_observation()
+        observation = self._observe_one(self._cell, counter.key, 0) if self._cell >= 0 else self._pose_observation()
         position = (float(self._pos[0]), float(self._pos[1]))
         return observation, self._info_of(0.0, False, ROUTE_LABELS[self._route], position, False)
 
     def step(self, action: Any) -> tuple[np.ndarray | int, float, bool, bool, dict[str, Any]]:
-        """Move 10 cm; eq. 11-12 evaluations; terminate on collision or goal."""
+        """Move 10 cm; eq. 11-12 evaluations; terminate on collision or goal, truncate at the time limit."""
         a = int(action)
         if not 0 <= a < 4:
             raise ValueError(f"action must be 0 (N), 1 (E), 2 (S) or 3 (W), got {action!r}")
-        self._step += 1
+        counter = self._counter
+        counter.step += 1
         if self._cell >= 0:
             self._cell, collided, goal, code, reward, punishment = self._outcomes[self._cell][a]
             if not collided:
                 self._pos = self._odo = self.core.lattice.cells[self._cell]
             if code:  # the route memory (core.remembered_route) of one robot
                 self._route = code
-            observation = self._observe_one(self._cell, self._key, self._step)
+            observation = self._observe_one(self._cell, counter.key, counter.step)
         else:
             move = self.episodes.move_off_lattice(self._pos[None], self._odo[None], np.array([a]), *self._counters())
             self._pos, self._odo = move.positions[0], move.odometry[0]
@@ -186,7 +166,8 @@ class NomadOfficeEnv(gym.Env):
         info = self._info_of(
             punishment, collided, ROUTE_LABELS[self._route], (float(self._pos[0]), float(self._pos[1])), goal
         )
-        return observation, reward, collided or goal, False, info
+        terminated = collided or goal
+        return observation, reward, terminated, counter.truncated(terminated), info
 
     def render(self) -> np.ndarray | None:
         """Top-down RGB frame: walls, start, goal, trajectory, robot and its sonar cones."""

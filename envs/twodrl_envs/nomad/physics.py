@@ -50,7 +50,7 @@ import numpy as np
 
 from twodrl_envs.nomad import sensors
 from twodrl_envs.nomad.core import OfficeCore, Robot, counter_word, office_core
-from twodrl_envs.nomad.episode import non_negative
+from twodrl_envs.nomad.episode import EnvOptions, non_negative
 from twodrl_envs.nomad.geometry import MOVES_CM, REGION_KEYS, ROBOT_RADIUS_CM, STEP_CM, OfficeMap
 from twodrl_envs.nomad.office import NomadOfficeEnv
 from twodrl_envs.nomad.realistic import RealisticModel
@@ -451,19 +451,11 @@ class NomadOfficeMuJoCoEnv(NomadOfficeEnv):
         model: RealisticModel | None = None,
         artifacts: bool = True,
         heading_sd_rad: float = 0.01,
-        observe_odometry: bool = True,
-        render_mode: str | None = None,
-        observation: str = "sensors",
-        starts: str = "map",
-        progress: float = 0.0,
+        **options: Any,
     ) -> None:
-        if render_mode is not None and render_mode not in RENDER_MODES:
-            raise ValueError(f"render_mode must be None or one of {list(RENDER_MODES)}, got {render_mode!r}")
+        checked = EnvOptions.of(type(self), options)
         core = office_core(map)
-        robot = MuJoCoRobot(core, model, artifacts=artifacts, heading_sd_rad=heading_sd_rad)
-        trail = None if render_mode is None else "rgb_array"  # either mode: the episodes keep the trail
-        self._setup(core, robot, observe_odometry, trail, observation, starts, progress)
-        self.render_mode = render_mode
+        self._setup(core, MuJoCoRobot(core, model, artifacts=artifacts, heading_sd_rad=heading_sd_rad), checked)
         self._view: TopDownView | None = None
         self._no_view = False
 

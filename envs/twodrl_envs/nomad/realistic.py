@@ -34,10 +34,10 @@ from typing import Any
 
 import numpy as np
 
-from twodrl_envs import MAX_EPISODE_STEPS
 from twodrl_envs.nomad import sensors
 from twodrl_envs.nomad.batched import BatchedNomadOffice
 from twodrl_envs.nomad.core import OfficeCore, Robot, office_core
+from twodrl_envs.nomad.episode import EnvOptions
 from twodrl_envs.nomad.geometry import MOVES_CM, ROBOT_RADIUS_CM, OfficeMap
 from twodrl_envs.nomad.office import NomadOfficeEnv
 from twodrl_envs.nomad.sensors import BEARINGS, IR_MAX_CM, N_SONAR, SONAR_MAX_CM, SONAR_MIN_CM, counter_hash
@@ -403,19 +403,10 @@ class NomadOfficeRealEnv(NomadOfficeEnv):
     The robot is a :class:`RealisticRobot` (``env.robot``).
     """
 
-    def __init__(
-        self,
-        map: str | Path | None = None,
-        *,
-        model: RealisticModel | None = None,
-        observe_odometry: bool = True,
-        render_mode: str | None = None,
-        observation: str = "sensors",
-        starts: str = "map",
-        progress: float = 0.0,
-    ) -> None:
+    def __init__(self, map: str | Path | None = None, *, model: RealisticModel | None = None, **options: Any) -> None:
+        checked = EnvOptions.of(type(self), options)
         core = office_core(map)
-        self._setup(core, RealisticRobot(core, model), observe_odometry, render_mode, observation, starts, progress)
+        self._setup(core, RealisticRobot(core, model), checked)
 
 
 class BatchedNomadOfficeReal(BatchedNomadOffice):
@@ -426,20 +417,8 @@ class BatchedNomadOfficeReal(BatchedNomadOffice):
     """
 
     def __init__(
-        self,
-        num_envs: int,
-        map: str | Path | None = None,
-        *,
-        model: RealisticModel | None = None,
-        observe_odometry: bool = True,
-        render_mode: str | None = None,
-        max_episode_steps: int = MAX_EPISODE_STEPS,
-        observation: str = "sensors",
-        starts: str = "map",
-        progress: float = 0.0,
+        self, num_envs: int, map: str | Path | None = None, *, model: RealisticModel | None = None, **options: Any
     ) -> None:
+        checked = EnvOptions.of(type(self), options)
         core = office_core(map)
-        robot = RealisticRobot(core, model)
-        self._setup(
-            num_envs, core, robot, observe_odometry, render_mode, max_episode_steps, observation, starts, progress
-        )
+        self._setup(num_envs, core, RealisticRobot(core, model), checked)
