@@ -1,8 +1,9 @@
 """What each part of 2D-RL contributes (``docs/ablation.md``): the ablation's report.
 
-Per run (:func:`summarize_run`): final test goal rate (last epoch), learned (final goal rate >= 0.8),
-the first epoch with a goal rate >= 0.5, shortcut share and reward per step of the last epoch,
-collapse (after a goal rate >= 0.8, 3 or more consecutive epochs below 0.5), and, over all learning
+Per run (:func:`summarize_run`): final test goal rate (last epoch), learned (final goal rate >=
+:data:`~sb3_twodrl.callbacks.SUCCESS_THRESHOLD`, 0.8), the first epoch with a goal rate >= 0.5, shortcut share and
+reward per step of the last epoch, collapse (after a goal rate >= the threshold, 3 or more consecutive epochs below
+0.5), and, over all learning
 steps, the share on which the interest, not a clamp, set the temperature. Per arm (:func:`table`):
 means over seeds with 95% intervals (t over seeds; Wilson for the share of seeds that learned).
 The fixed arms act at ``rules.fixed_temperature.value``; the report measures ``rules.fixed_temperature.arm``'s
@@ -18,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from sb3_twodrl.callbacks import SUCCESS_THRESHOLD
 from twodrl_bench.intervals import mean_ci, wilson
 from twodrl_bench.reports import Part
 
@@ -47,14 +49,14 @@ def summarize_run(rows: Any) -> dict[str, float]:
     share = rows["interest_share"].to_numpy(dtype=float)
     known = ~np.isnan(share)
     half = np.flatnonzero(rates >= 0.5)
-    peak = np.flatnonzero(rates >= 0.8)
+    peak = np.flatnonzero(rates >= SUCCESS_THRESHOLD)
     longest = run = 0
     for below in rates[peak[0] :] < 0.5 if peak.size else []:
         run = run + 1 if below else 0
         longest = max(longest, run)
     last = rows.iloc[-1]
     return {
-        "learned": float(rates[-1] >= 0.8),
+        "learned": float(rates[-1] >= SUCCESS_THRESHOLD),
         "final_goal_rate": float(rates[-1]),
         "epochs_to_half": float(half[0] + 1) if half.size else math.nan,
         "shortcut_share": float(last["shortcut_share"]),

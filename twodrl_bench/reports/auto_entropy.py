@@ -28,6 +28,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from sb3_twodrl.callbacks import SUCCESS_THRESHOLD
 from twodrl_bench.intervals import welch_ci, wilson
 from twodrl_bench.reports import Part
 from twodrl_bench.reports.benchmark import _cell, _diff
@@ -42,7 +43,7 @@ path: 13, 15 or 17 steps, 100 if it never reaches the goal) and the office's fin
 a goal rate >= 0.5 (its mean over the seeds that reached it). See :func:`_descriptive`."""
 MAX_PATHS = 5
 """A descriptive column with at most this many distinct values over a task's runs is shown as counts."""
-LEARNED = {"metric": "goal_rate", "at_least": 0.8}
+LEARNED = {"metric": "goal_rate", "at_least": SUCCESS_THRESHOLD}
 """The learned rule an epoch task must register: the factorial's (:func:`.factorial.run_metrics`)."""
 RULE_KEYS = ("claim", "against", "zero", "fixed", "pairs", "return", "return_margin", "events", "events_margin")
 
@@ -112,11 +113,11 @@ def extension(values: dict[str, dict[str, list[float]]], rules: dict[str, Any]) 
 
 def epoch_runs(frame: Any, rules: dict[str, Any]) -> list[Row]:
     """The paper's epoch rows (``frame``, one per epoch, as :func:`~twodrl_bench.folders.collect` reads them) read
-    per (arm, seed) with the factorial's
-    :func:`~twodrl_bench.reports.factorial.run_metrics` (the last 10% of epochs; learned: the last epoch's goal
-    rate >= 0.8, which ``rules["learned"]`` must register), plus ``move`` (``rules["extend"]``'s late window minus
-    its early one, on reward per step) and, for a learned coefficient, ``ent_coef_course`` (``ent_coef`` and
-    ``entropy_fraction`` at each tenth of the epochs)."""
+    per (arm, seed) with the factorial's :func:`~twodrl_bench.reports.factorial.run_metrics` (the last 10% of epochs;
+    learned: the last epoch's goal rate >= :data:`~sb3_twodrl.callbacks.SUCCESS_THRESHOLD`, which
+    ``rules["learned"]`` must register), plus ``move`` (``rules["extend"]``'s late window minus its early one, on
+    reward per step) and, for a learned coefficient, ``ent_coef_course`` (``ent_coef`` and ``entropy_fraction`` at
+    each tenth of the epochs)."""
     if rules["learned"] != LEARNED:
         raise ValueError(f"rules['learned'] must be the factorial's {LEARNED}, got {rules['learned']}")
     out = []

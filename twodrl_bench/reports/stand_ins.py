@@ -20,9 +20,6 @@ from sb3_twodrl.callbacks import SUCCESS_THRESHOLD
 from twodrl_bench.intervals import mean_ci
 from twodrl_bench.reports import Part
 
-LEARNED = SUCCESS_THRESHOLD
-"""A robot "runs" a policy at this success share or more (the office's learned rule)."""
-
 
 def verdict(low: float, high: float, within: float) -> str:
     """S1: ``agree`` if [low, high] lies within [-within, +within], ``disagree`` if it excludes 0 and reaches
@@ -66,7 +63,8 @@ def report(parts: list[Part], out: Path) -> str:
         f"Rule S1: success share on the physics robot (MuJoCo) minus on the artifact model (Real), paired by office, "
         f"mean [95% t interval]; agree: the interval within +-{within}; disagree: it excludes 0 and reaches beyond.",
         "",
-        "| trained on | arm | offices | MuJoCo, mean | Real, mean | MuJoCo minus Real | S1 | same side of 0.8 |",
+        "| trained on | arm | offices | MuJoCo, mean | Real, mean | MuJoCo minus Real | S1 | "
+        f"same side of {SUCCESS_THRESHOLD} |",
         "| --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for trained in ("simulator", "database"):
@@ -76,7 +74,7 @@ def report(parts: list[Part], out: Path) -> str:
                 continue
             difference = (group["mujoco"] - group["real"]).tolist()
             mean, low, high = _interval(difference)
-            same = int(np.sum((group["mujoco"] >= LEARNED) == (group["real"] >= LEARNED)))
+            same = int(np.sum((group["mujoco"] >= SUCCESS_THRESHOLD) == (group["real"] >= SUCCESS_THRESHOLD)))
             lines.append(
                 f"| {trained} | {arm} | {len(group)} | {group['mujoco'].mean():.3f} | {group['real'].mean():.3f} | "
                 f"{mean:+.3f} [{low:+.3f}, {high:+.3f}] | {verdict(low, high, within)} | {same}/{len(group)} |"
