@@ -14,6 +14,12 @@ text: ``sb3-twodrl-map --seed SEED --size SIZE --out my_office.json``, then the 
 (``NomadOfficeMemorable-v0``) and export commands and its robot-side loop (20 trials on the stand-in robot from the
 map's start); the row's ``goal_rate`` is the loop's, ``db_goal_rate`` the train command's.
 
+``--robot-path`` runs, per generated map, docs/robot_path.md as the doc writes it, the map file in the place of the
+paper's office: survey the MuJoCo robot into a bag, import it by the localised pose, train, export by the printed
+line, drive the MuJoCo robot 20 trials from the start (``goal_rate``); then the same policy on the other stand-in,
+the artifact model (``real_goal_rate``), and the simulator path's policy (the documented simulator command on the
+same map, exported by its printed line) on the MuJoCo robot (``sim_goal_rate``). Each part's seconds are recorded.
+
     OMP_NUM_THREADS=1 python scripts/bench_first_try.py --algos twoda2c --sizes S M --map-seeds 5000 5001 \\
         --out results/first_try/rows_twoda2c.csv
     python scripts/bench_first_try.py --table results/first_try/rows_*.csv --plot results/first_try/fig_time.png
@@ -48,12 +54,16 @@ FIELDS = (
     "train_s", "wall_s", "commit", "cpu",
 )  # fmt: skip
 DATABASE_FIELDS = (*FIELDS, "db_goal_rate")
+ROBOT_FIELDS = (*DATABASE_FIELDS, "survey_s", "import_s", "real_goal_rate", "sim_goal_rate")
 LINE = re.compile(r"goal rate (\d\.\d\d) \((\d+) of (\d+)")
 EXPORT = re.compile(r"^sb3-twodrl-train: export: (.*)$", re.MULTILINE)
 STAND_IN = re.compile(r"^goal rate on the stand-in robot: (\d\.\d\d)", re.MULTILINE)
 AGREE = 0.2
 """On the database path, the final test and the robot agree when their goal rates differ by at most this."""
+MUJOCO = re.compile(r"^goal rate on the MuJoCo robot: (\d\.\d\d)", re.MULTILINE)
 DOC = Path(__file__).resolve().parents[1] / "docs" / "own_office.md"
+ROBOT_DOC = DOC.parent / "robot_path.md"
+MAP_FILE = "my_office.json"
 
 
 def _row(map_: str, size: str, moves: int, algo: str, seed: int, rate: float, record: dict) -> dict[str, object]:
@@ -145,6 +155,82 @@ def run_database(
     }
 
 
+def doc_robot_path() -> tuple[list[str], str]:
+    """docs/robot_path.md's survey, import (by the localised pose), train and export commands and its drive on the
+    MuJoCo robot, with the map file :data:`MAP_FILE` where the doc names the paper's office."""
+    text = ROBOT_DOC.read_text()
+
+    def on_map(line: str) -> str:
+        return (
+            line.replace("--map office", f"--map {MAP_FILE}")
+            .replace("""map:'"office"'""", f"""map:'"{MAP_FILE}"'""")
+            .replace('map="office"', f'map="{MAP_FILE}"')
+        )
+
+    lines = [line[2:] for line in text.splitlines() if line.startswith("$ sb3-twodrl-")]
+    commands = [on_map(c) for c in lines if "office_odom.npz" not in c and not c.startswith("sb3-twodrl-replay-bag")]
+    return commands, on_map(text[text.index("## 5. ") :].split("```python\n", 1)[1].split("```", 1)[0])
+
+
+def run_robot_path(
+    map_: str, commit: str, cpu: str, algo: str = "twoda2c", extra: list[str] = (), checks: Path | None = None
+) -> dict[str, object]:
+    """docs/robot_path.md on the generated office ``map_`` (module docstring), its train command with ``--algo
+    algo`` and ``extra`` arguments; the run's ``goal_checks.json`` appended to ``checks``."""
+    _, size, map_seed = map_.split(":")
+    commands, loop = doc_robot_path()
+    commands = [_with(c.replace("twoda2c", algo), extra) if "-train " in c else c for c in commands]
+    with tempfile.TemporaryDirectory() as folder:
+
+        def shell(command: str) -> tuple[str, float]:
+            clock = time.perf_counter()
+            done = subprocess.run(["bash", "-c", command], cwd=folder, capture_output=True, text=True)
+            if done.returncode != 0:
+                raise RuntimeError(f"{command} failed:\n{done.stdout[-2000:]}\n{done.stderr[-2000:]}")
+            return done.stdout, time.perf_counter() - clock
+
+        def drive(code: str) -> float:
+            done = subprocess.run([sys.executable, "-c", code], cwd=folder, capture_output=True, text=True)
+            if done.returncode != 0:
+                raise RuntimeError(f"the robot loop failed:\n{done.stderr[-2000:]}")
+            return float(MUJOCO.search(done.stdout).group(1))  # type: ignore[union-attr]
+
+        clock = time.perf_counter()
+        shell(f"sb3-twodrl-map --seed {map_seed} --size {size} --out {MAP_FILE}")
+        out, seconds = "", {}
+        for command in commands:
+            if command.startswith("sb3-twodrl-export"):
+                command = EXPORT.findall(out)[-1]  # the doc: run the export line the train command printed
+            printed, seconds[command.split()[0]] = shell(command)
+            out += printed
+        rate = drive(loop)
+        wall = time.perf_counter() - clock
+        (record_file,) = Path(folder).glob("logs/*/*/goal_checks.json")
+        record = json.loads(record_file.read_text())
+        real = drive(loop.replace("NomadOfficeMuJoCo-v0", "NomadOfficeReal-v0"))
+        simulator, _ = shell(f"""sb3-twodrl-train --algo {algo} --env NomadOffice-v0 --env-kwargs map:'"{MAP_FILE}"'""")
+        shell(EXPORT.findall(simulator)[-1].replace(" policy.onnx ", " simulator.onnx "))
+        sim = drive(loop.replace('"policy.onnx"', '"simulator.onnx"'))
+    facts = task_facts("NomadOffice-v0", {"map": map_})
+    assert facts is not None
+    seed = int(re.search(r"^Seed: (\d+)$", out, re.MULTILINE).group(1))  # type: ignore[union-attr]
+    if checks is not None:
+        with checks.open("a") as f:
+            f.write(json.dumps({"map": map_, "algo": f"{algo}-robot", "seed": seed, **record}, default=str) + "\n")
+    moves = facts["shortest_path"]
+    return {
+        **_row(map_, size_class(moves), moves, f"{algo}-robot", seed, rate, record),
+        "wall_s": round(wall, 1),
+        "commit": commit,
+        "cpu": cpu,
+        "db_goal_rate": float(LINE.search(out).group(1)),  # type: ignore[union-attr]
+        "survey_s": round(seconds["sb3-twodrl-survey"], 1),
+        "import_s": round(seconds["sb3-twodrl-record-database"], 1),
+        "real_goal_rate": real,
+        "sim_goal_rate": sim,
+    }
+
+
 def run(
     algo: str,
     map_: str,
@@ -189,14 +275,30 @@ def run(
 def table(rows: list[dict[str, str]]) -> str:
     """Per size and algorithm: offices at goal rate >= 0.8 (95% Wilson interval), wall seconds median and max; where
     every row is of the database path (``db_goal_rate``), also the runs whose final test and robot agree
-    (:data:`AGREE`)."""
+    (:data:`AGREE`); where every row is of the robot path, also the offices the same policy drives to the goal on
+    the artifact model and those the simulator's policy drives there on the MuJoCo robot, and each part's seconds."""
     database = all(r.get("db_goal_rate") for r in rows)
-    agree = " | final test and robot within 0.2" if database else ""
+    robot = all(r.get("real_goal_rate") for r in rows)
+    extra = (" final test and robot within 0.2 |" if database else "") + (
+        " on the artifact model >= 0.8 | simulator policy on MuJoCo >= 0.8 | survey s | import s | training s |"
+        if robot
+        else ""
+    )
     lines = [
         "| size | algo | offices at goal rate >= 0.8 [95% interval] | share | stopped as learned "
-        f"| wall s, median (max){agree} |",
-        "| --- | --- | --- | --- | --- | --- |" + (" --- |" if database else ""),
+        f"| wall s, median (max) |{extra}",
+        "| --- | --- | --- | --- | --- | --- |" + " --- |" * extra.count("|"),
     ]
+
+    def median_max(group: list[dict[str, str]], field: str) -> str:
+        values = sorted(float(r[field]) for r in group)
+        return f"{np.median(values):.0f} ({values[-1]:.0f})"
+
+    def count(group: list[dict[str, str]], field: str) -> str:
+        good = sum(float(r[field]) >= SUCCESS_THRESHOLD for r in group)
+        low, high = wilson(good, len(group))
+        return f"{good}/{len(group)} [{low:.2f}, {high:.2f}]"
+
     for size in ("paper", "S", "M", "S+M", "L"):
         for algo in sorted({r["algo"] for r in rows}, reverse=True):
             group = [
@@ -205,24 +307,29 @@ def table(rows: list[dict[str, str]]) -> str:
             if not group:
                 continue
             good = sum(r["learned"] == "True" for r in group)
-            low, high = wilson(good, len(group))
             stopped = sum(r["stopped_learned"] == "True" for r in group)
-            wall = sorted(float(r["wall_s"]) for r in group)
-            close = database and sum(
-                abs(float(r["goal_rate"]) - float(r["db_goal_rate"])) <= AGREE + 1e-9 for r in group
-            )
-            lines.append(
-                f"| {size} | {algo} | {good}/{len(group)} [{low:.2f}, {high:.2f}] | {good / len(group):.2f} | "
-                f"{stopped}/{len(group)} | {np.median(wall):.0f} ({wall[-1]:.0f}) |"
-                + (f" {close}/{len(group)} |" if database else "")
-            )
+            cells = [
+                count(group, "goal_rate"),
+                f"{good / len(group):.2f}",
+                f"{stopped}/{len(group)}",
+                median_max(group, "wall_s"),
+            ]
+            if database:
+                close = sum(abs(float(r["goal_rate"]) - float(r["db_goal_rate"])) <= AGREE + 1e-9 for r in group)
+                cells.append(f"{close}/{len(group)}")
+            if robot:
+                cells += [count(group, "real_goal_rate"), count(group, "sim_goal_rate")]
+                cells += [median_max(group, f) for f in ("survey_s", "import_s", "train_s")]
+            lines.append(f"| {size} | {algo} | " + " | ".join(cells) + " |")
     head = "| map | moves | algo | seed | goal rate | kept at | steps | budget | wall s |"
-    lines += ["", head + (" final test |" if database else ""), "|" + " --- |" * (10 if database else 9)]
+    more = (" final test |" if database else "") + (" artifact model | simulator policy |" if robot else "")
+    lines += ["", head + more, "|" + " --- |" * (9 + more.count("|"))]
     for r in sorted(rows, key=lambda r: (int(r["moves"]), r["map"], r["algo"])):
         lines.append(
             f"| {r['map']} | {r['moves']} | {r['algo']} | {r['seed']} | {float(r['goal_rate']):.2f} | {r['kept_at']} | "
             f"{r['steps']} | {r['budget']} | {r['wall_s']} |"
             + (f" {float(r['db_goal_rate']):.2f} |" if database else "")
+            + (f" {float(r['real_goal_rate']):.2f} | {float(r['sim_goal_rate']):.2f} |" if robot else "")
         )
     return "\n".join(lines) + "\n"
 
@@ -377,7 +484,9 @@ def main() -> None:
     )
     parser.add_argument("--budget-factor", type=float, help="-n this times the derived budget (default: not given)")
     parser.add_argument("--checks", type=Path, help="JSON lines file to append each run's goal_checks.json to")
-    parser.add_argument("--database", action="store_true", help="docs/own_office.md's database path")
+    path = parser.add_mutually_exclusive_group()
+    path.add_argument("--database", action="store_true", help="docs/own_office.md's database path")
+    path.add_argument("--robot-path", action="store_true", help="docs/robot_path.md on the MuJoCo robot")
     parser.add_argument(
         "--train-args",
         default="",
@@ -424,16 +533,18 @@ def main() -> None:
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
     cpu = next((line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo") if "model name" in line), "")
     cpu = cpu or platform.processor()
-    fields = DATABASE_FIELDS if args.database else FIELDS
+    fields = ROBOT_FIELDS if args.robot_path else DATABASE_FIELDS if args.database else FIELDS
     for map_ in maps:
         for algo in args.algos:
             for seed in args.seeds or [None] * args.repeats:
-                label = f"{algo}-database" if args.database else algo
+                label = f"{algo}-robot" if args.robot_path else f"{algo}-database" if args.database else algo
                 key = (map_, label, None if seed is None else str(seed))
                 if done[key] > 0:
                     done[key] -= 1
                     continue
-                if args.database:
+                if args.robot_path:
+                    row = run_robot_path(map_, commit, cpu, algo, args.train_args.split(), args.checks)
+                elif args.database:
                     row = run_database(map_, commit, cpu, algo, args.train_args.split(), args.checks)
                 else:
                     row = run(algo, map_, commit, cpu, seed, args.checks, args.budget_factor, args.train_args.split())
