@@ -21,8 +21,8 @@ from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.env_util import make_vec_env
 
 import twodrl_envs  # noqa: F401  (registers the IDs)
+from twodrl_bench.algorithms import make_model
 from twodrl_bench.algorithms.variants import INTEREST_MODES, PREFERENCE_MODES
-from twodrl_bench.algorithms.variants import VariantTwoDimA2C as TwoDimA2C  # the interest modes are variants
 from twodrl_zoo.vec_env import make_train_env
 
 
@@ -80,12 +80,13 @@ def main() -> None:
     parser.add_argument("--preferences", choices=PREFERENCE_MODES, default="bounded")
     args = parser.parse_args()
     th.set_num_threads(1)
-    modes = dict(interest=args.interest, preferences=args.preferences, seed=args.seed)
+    modes = dict(interest=args.interest, preferences=args.preferences)
     if args.env == "NomadOffice-v0":
         env = make_train_env("NomadOffice-v0", 16, args.seed)
-        model = TwoDimA2C("MlpPolicy", env, gamma=0.9, punishment_gamma=0.1, reward_split="info", **modes)
+        settings = dict(gamma=0.9, punishment_gamma=0.1, reward_split="info", **modes)
     else:
-        model = TwoDimA2C("MlpPolicy", make_vec_env(args.env, n_envs=8, seed=args.seed), **modes)
+        env, settings = make_vec_env(args.env, n_envs=8, seed=args.seed), modes
+    model = make_model("twoda2c_variant", env, settings, seed=args.seed)  # the interest modes are variants
     print("steps | d+ mean | median | p90 | p99 | max | cv | pref. spread | pref. sd | H(T=1) | interest share")
     model.learn(args.steps, callback=Scales(args.window))
 

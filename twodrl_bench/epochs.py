@@ -5,7 +5,7 @@ over all envs and, in the step in which the (e*K)-th ends, runs epoch e's M test
 policy is the same whichever of that step's trials is the (e*K)-th: parameters change only
 between rollouts). Trials of that step beyond e*K count toward epoch e + 1, so every epoch is
 exactly K trials and no collected experience is thrown away at an epoch boundary. A stock arm (``a2c``, ``ppo``)
-trains SB3's algorithm on the fast path (:func:`twodrl_bench.algorithms.epoch_class`), its rows labelled by the arm.
+trains SB3's algorithm on the fast path (:func:`twodrl_bench.algorithms.fast_path`), its rows labelled by the arm.
 
 Every ``checkpoint_every`` epochs, at the next rollout start (a clean boundary: the update of the
 last rollout done, the buffer empty), the run is checkpointed (:mod:`.checkpoint`) together with
@@ -38,7 +38,7 @@ from stable_baselines3.common.vec_env import VecEnv
 
 from sb3_twodrl.callbacks import NavigationMetricsCallback
 from twodrl_bench import jobs
-from twodrl_bench.algorithms import epoch_class
+from twodrl_bench.algorithms import algo_class, fast_path, make_model
 from twodrl_bench.checkpoint import set_rng_state
 from twodrl_bench.experiment import Job, with_seed
 from twodrl_bench.protocol import LEARNING, METRICS, ROUTES, trial_seed
@@ -136,11 +136,10 @@ def _new_model(job: Job) -> BaseAlgorithm:
     if isinstance(hp.get("policy_kwargs"), str):
         hp["policy_kwargs"] = evaluate(hp["policy_kwargs"])
     n_envs = int(hp.pop("n_envs", 1))
-    policy = hp.pop("policy", "MlpPolicy")
     experiment, protocol = job.experiment, job.protocol
     env = make_train_env(experiment.env, n_envs, job.seed, protocol.vec_env, job.env_kwargs)
     tb = str(Path(job.out_dir) / "tb") if protocol.tensorboard else None
-    return epoch_class(job.arm.algo)(policy, env, seed=job.seed, device="cpu", tensorboard_log=tb, **hp)
+    return make_model(fast_path(job.arm.algo), env, hp, seed=job.seed, device="cpu", tensorboard_log=tb)
 
 
 def train(job: Job) -> list[Row]:
@@ -183,7 +182,7 @@ def run(job: Job) -> list[Row]:
     rows = [{"arm": job.arm_name, **row} for row in train(job)]
     transfer = job.protocol.transfer
     if transfer:
-        model = epoch_class(job.arm.algo).load(jobs.model_path(job.out_dir, job.name), device="cpu")
+        model = algo_class(fast_path(job.arm.algo)).load(jobs.model_path(job.out_dir, job.name), device="cpu")
         rows[-1].update(transfer_columns(model, job.experiment.env, job.env_kwargs, with_seed(transfer, job.seed)))
     jobs.finish(job)
     return rows

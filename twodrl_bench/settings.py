@@ -7,41 +7,38 @@ import inspect
 from pathlib import Path
 from typing import Any
 
+from twodrl_bench.algorithms import SUFFIXES, algo_class, stock_algo
 from twodrl_zoo.hyperparams import derived_settings, hyperparams_path, read_entry, resolve
-from twodrl_zoo.recipe import Derived
 
 ZOO_ONLY = ("n_timesteps", "callback", "normalize", "env_wrapper", "vec_env_wrapper", "frame_stack")
 """Keys of an rl-zoo3 entry that only rl-zoo3 reads: dropped from an epoch protocol's settings."""
-STOCK = {"twoda2c": "a2c", "twodppo": "ppo"}
-"""The stock algorithm of each 2D-RL algorithm: whose entry it reads from rl-zoo3's files (``settings: rl-zoo3``)."""
-SETTINGS_SUFFIXES = ("_variant", "_auto")
-"""An algorithm named ``<algo><suffix>`` (an ablation variant, a self-tuning arm) reads ``<algo>``'s settings."""
 _NOT_SETTINGS = ("policy", "env", "verbose", "seed", "device", "tensorboard_log", "_init_setup_model")
 
 
 def settings_algo(algo: str) -> str:
-    """The algorithm whose settings file ``algo`` reads (:data:`SETTINGS_SUFFIXES`)."""
-    for suffix in SETTINGS_SUFFIXES:
+    """The algorithm whose settings file ``algo`` reads: ``<algo>``'s for ``<algo><suffix>``
+    (:data:`twodrl_bench.algorithms.SUFFIXES`)."""
+    for suffix in SUFFIXES:
         algo = algo.removesuffix(suffix)
     return algo
 
 
 def settings_file(algo: str, settings: str = "packaged") -> Path:
     """The rl-zoo3 hyperparameter file an arm of ``algo`` reads: ``packaged`` (:mod:`twodrl_zoo.hyperparams`),
-    ``rl-zoo3`` (rl-zoo3's own, of the stock algorithm for a 2D-RL one: :data:`STOCK`) or a folder of ``<algo>.yml``.
+    ``rl-zoo3`` (rl-zoo3's own, of the stock algorithm the class extends: :func:`twodrl_bench.algorithms.stock_algo`)
+    or a folder of ``<algo>.yml``.
 
     :raises ValueError: if the file does not exist
     """
-    algo = settings_algo(algo)
     if settings == "rl-zoo3":
         import rl_zoo3
 
-        algo = STOCK.get(algo, algo)
+        algo = stock_algo(algo)
         path = Path(rl_zoo3.__file__).parent / "hyperparams" / f"{algo}.yml"
         if not path.is_file():
             raise ValueError(f"settings: rl-zoo3 has no hyperparameter file for {algo!r} ({path})")
         return path
-    return hyperparams_path(algo, None if settings == "packaged" else settings)
+    return hyperparams_path(settings_algo(algo), None if settings == "packaged" else settings)
 
 
 def epoch_entry(path: str | Path, env_id: str) -> dict[str, Any]:
@@ -85,17 +82,12 @@ STUDY_REVISION = 1
 """The revision of the settings rule (:mod:`twodrl_zoo.recipe`) the committed studies ran with (their rows)."""
 
 
-def derived(env: str, env_kwargs: dict[str, Any]) -> Derived | None:
-    """What the task of ``env`` with the options ``env_kwargs`` derives by the studies' rule
-    (:func:`twodrl_zoo.hyperparams.derived_settings`, revision :data:`STUDY_REVISION`), None where it derives
-    nothing (the paper's maps)."""
-    return derived_settings(env, env_kwargs, revision=STUDY_REVISION)
-
-
 def test_env_kwargs(env: str, env_kwargs: dict[str, Any]) -> dict[str, Any]:
     """The options of a test env of ``env``: ``env_kwargs`` with the test options of its task (the map's start and
-    time limit), as ``sb3-twodrl-train`` tests (:func:`twodrl_zoo.hyperparams.resolve`)."""
-    return resolve({}, derived(env, env_kwargs), env_kwargs=env_kwargs).eval_env_kwargs
+    time limit, by the rule of :data:`STUDY_REVISION`), as ``sb3-twodrl-train`` tests
+    (:func:`twodrl_zoo.hyperparams.resolve`)."""
+    derived = derived_settings(env, env_kwargs, revision=STUDY_REVISION)
+    return resolve({}, derived, env_kwargs=env_kwargs).eval_env_kwargs
 
 
 def monitor_kwargs(events: str) -> str:
@@ -135,8 +127,6 @@ def constructor_defaults(cls: type) -> dict[str, Any]:
 def class_defaults(algo: str, hyperparams: dict[str, Any]) -> dict[str, str]:
     """The constructor defaults of ``algo``'s class (:func:`constructor_defaults`) that ``hyperparams`` leave in
     force, as ``repr``: a run resumed after a default changed (a new release) is then refused, not mixed."""
-    from twodrl_bench.algorithms import algo_class
-
     defaults = constructor_defaults(algo_class(algo))
     return {
         name: repr(value) for name, value in defaults.items() if name not in _NOT_SETTINGS and name not in hyperparams

@@ -23,7 +23,7 @@ Keys this job reads, beside the fields every spec has:
   ``first_goal_at`` (the first check's timestep at which an episode reached the goal, ``info["is_success"]``).
 - ``protocol.keep_learned`` (optional, false): as ``sb3-twodrl-train`` does (:mod:`twodrl_zoo.manager`), keep the
   policy of the best check (:class:`sb3_twodrl.callbacks.GoalRecord`) and stop training once
-  :data:`~twodrl_zoo.manager.PATIENCE` checks in a row reach :data:`~twodrl_zoo.manager.SUCCESS_THRESHOLD`; the
+  :data:`~sb3_twodrl.callbacks.PATIENCE` checks in a row reach :data:`~sb3_twodrl.callbacks.SUCCESS_THRESHOLD`; the
   final evaluation and the transfer then run the kept policy. Columns ``kept_at``, ``learned_at`` (NaN if never)
   and ``steps`` (the timesteps trained: one vector step past ``learned_at`` when stopped, as the stop comes at the
   first step after the rollout's check).
@@ -34,7 +34,8 @@ Keys this job reads, beside the fields every spec has:
   (:func:`twodrl_bench.stand_ins.stand_in_trials`, needs ``sb3-twodrl[mujoco]``), columns ``<robot>_<outcome>``
   (``mujoco_success``, ``real_collision``, ...).
 - ``env_kwargs``: the job's (``{seed}`` in a value is its seed). Where the env derives settings from them
-  (:func:`twodrl_bench.settings.derived`: a map other than the paper's), they apply as ``sb3-twodrl-train``
+  (:func:`twodrl_zoo.hyperparams.derived_settings` at the studies' revision
+  :data:`~twodrl_bench.settings.STUDY_REVISION`: a map other than the paper's), they apply as ``sb3-twodrl-train``
   applies them: its hyperparameters under the arm's ``override``, its training options under ``env_kwargs``, its
   test options (the map's start, the time limit) in the evaluation, the checks and the transfer.
 - ``arms.<name>.settings``: ``packaged`` (default), ``rl-zoo3`` or a folder
@@ -63,17 +64,17 @@ from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.monitor import Monitor, ResultsWriter
 
-from sb3_twodrl.callbacks import GoalCheck, GoalRecord
+from sb3_twodrl.callbacks import PATIENCE, SUCCESS_THRESHOLD, GoalCheck, GoalRecord
 from twodrl_bench import jobs
 from twodrl_bench.experiment import Arm, Experiment, Job, with_seed
 from twodrl_bench.protocol import TimestepsProtocol
-from twodrl_bench.settings import check_entry, derived, timesteps_entry
+from twodrl_bench.settings import STUDY_REVISION, check_entry, timesteps_entry
 from twodrl_bench.settings import settings_file as settings_file_of
 from twodrl_bench.stand_ins import stand_in_columns, stand_in_trials
 from twodrl_bench.trials import transfer_columns
 from twodrl_zoo.evaluation import goal_rate, run_episodes
-from twodrl_zoo.hyperparams import resolve
-from twodrl_zoo.manager import PATIENCE, SUCCESS_THRESHOLD, ExperimentManager
+from twodrl_zoo.hyperparams import derived_settings, resolve
+from twodrl_zoo.manager import ExperimentManager
 
 Row = dict[str, Any]
 EVAL_SEED = 10**6
@@ -324,25 +325,21 @@ def run(job: Job) -> list[Row]:
     text); ``wall_s``.
     """
     import torch as th
-    from rl_zoo3 import utils as zoo_utils
 
-    from twodrl_bench.algorithms import ALGOS
+    from twodrl_bench.algorithms import ALGOS, algo_class
     from twodrl_bench.checkpoint import set_rng_state
     from twodrl_zoo.zoo import register_zoo
 
     clock = time.perf_counter()
     experiment, protocol, arm = job.experiment, job.protocol, job.arm
-    register_zoo()
-    zoo_utils.ALGOS.update(ALGOS)  # the bench's table: its names are rl-zoo3's classes where both have one
-    if arm.algo not in zoo_utils.ALGOS:
-        raise ValueError(f"arm algo must be one of rl-zoo3's {sorted(zoo_utils.ALGOS)}, got {arm.algo!r}")
+    algo = algo_class(arm.algo)
+    register_zoo(ALGOS)  # the manager builds the arm's model from rl-zoo3's table: the bench's names in it
     for package in experiment.gym_packages:
         importlib.import_module(package)
     th.set_num_threads(1)
     env, events, env_kwargs = experiment.env, protocol.events, job.env_kwargs
-    settings = resolve(
-        copy.deepcopy(arm.hyperparams), derived(env, env_kwargs), copy.deepcopy(arm.override), env_kwargs
-    )
+    derived = derived_settings(env, env_kwargs, revision=STUDY_REVISION)
+    settings = resolve(copy.deepcopy(arm.hyperparams), derived, copy.deepcopy(arm.override), env_kwargs)
     entry = settings.entry
     check_entry(arm.name, entry, protocol.as_dict())
     test_kwargs = settings.eval_env_kwargs
@@ -374,7 +371,7 @@ def run(job: Job) -> list[Row]:
     if statistics is not None:
         statistics.save(str(run_dir / env / "vecnormalize.pkl"))
     train_eps = training_episodes(run_dir, int(entry.get("n_envs", 1)), events)
-    model = zoo_utils.ALGOS[arm.algo].load(run_dir / f"{env}.zip", device="cpu")
+    model = algo.load(run_dir / f"{env}.zip", device="cpu")
     final_env = eval_env(env, entry, test_kwargs, EVAL_SEED + job.seed, run_dir / env / "vecnormalize.pkl")
     final = evaluate(model, final_env, protocol.eval_episodes, events)
     final_env.close()

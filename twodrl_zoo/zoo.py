@@ -16,7 +16,7 @@ Requires the ``zoo`` extra. The installed commands ``sb3-twodrl-train`` and ``sb
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from importlib.metadata import entry_points
 from typing import Any
 
@@ -116,10 +116,19 @@ ZOO_ALGOS: dict[str, type] = {name: ALGOS[name] for name in ZOO_SAMPLERS}
 entries (``a2c``, ``ppo``) rl-zoo3 has already."""
 
 
-def register_zoo() -> None:
-    """Register ``twoda2c`` and ``twodppo`` in rl-zoo3's algorithm, sampler and converter tables (idempotent)."""
+def register_zoo(algos: Mapping[str, type] | None = None) -> None:
+    """Register ``twoda2c`` and ``twodppo`` in rl-zoo3's algorithm, sampler and converter tables (idempotent); with
+    ``algos``, every name of that table too (the bench's :data:`twodrl_bench.algorithms.ALGOS`, so that rl-zoo3's
+    ``ExperimentManager`` builds its classes). The one place that writes rl-zoo3's tables.
+
+    :raises ValueError: naming the algorithm, if ``algos`` gives a name rl-zoo3 has for another class
+    """
     from rl_zoo3 import hyperparams_opt, utils
 
+    clash = [name for name, algo in (algos or {}).items() if utils.ALGOS.get(name, algo) is not algo]
+    if clash:
+        raise ValueError(f"algos: {', '.join(clash)} name other classes in rl-zoo3's table")
+    utils.ALGOS.update(algos or {})
     for key, algo in ZOO_ALGOS.items():
         utils.ALGOS[key] = algo
         hyperparams_opt.HYPERPARAMS_SAMPLER[key] = ZOO_SAMPLERS[key]

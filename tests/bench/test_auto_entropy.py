@@ -15,8 +15,8 @@ from stable_baselines3.common.envs import IdentityEnv, IdentityEnvMultiDiscrete
 
 import twodrl_bench
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
+from twodrl_bench.algorithms import ALGOS
 from twodrl_bench.algorithms.auto_entropy import (
-    AUTO_ENTROPY_ALGOS,
     TARGET_FRACTION,
     AutoEntropyA2C,
     AutoEntropyPPO,
@@ -160,7 +160,13 @@ def test_the_recorded_defaults_hold_the_base_defaults_and_the_new_arguments() ->
     assert defaults["target_entropy_fraction"] == TARGET_FRACTION
     assert defaults["ent_coef_lr"] is None
     assert defaults["punishment_gamma"] == inspect.signature(TwoDimA2C.__init__).parameters["punishment_gamma"].default
-    assert set(AUTO_ENTROPY_ALGOS) == {"a2c_auto", "ppo_auto", "twoda2c_auto", "twodppo_auto"}
+    auto = {name: cls for name, cls in ALGOS.items() if name.endswith("_auto")}
+    assert auto == {
+        "a2c_auto": AutoEntropyA2C,
+        "ppo_auto": AutoEntropyPPO,
+        "twoda2c_auto": AutoEntropyTwoDimA2C,
+        "twodppo_auto": AutoEntropyTwoDimPPO,
+    }
 
 
 @pytest.mark.parametrize(
@@ -216,8 +222,17 @@ def test_the_studys_specs_name_their_paths_and_known_algorithms() -> None:
         assert spec["name"] == str(path.relative_to(root).with_suffix(""))
         assert spec["seeds"] == list(range(400, 410))
         for arm in spec["arms"].values():
-            assert arm["algo"] in {"a2c", "ppo", "twoda2c", "twodppo", *AUTO_ENTROPY_ALGOS}
-            if arm["algo"] in AUTO_ENTROPY_ALGOS:
+            assert arm["algo"] in {
+                "a2c",
+                "ppo",
+                "twoda2c",
+                "twodppo",
+                "a2c_auto",
+                "ppo_auto",
+                "twoda2c_auto",
+                "twodppo_auto",
+            }
+            if arm["algo"].endswith("_auto"):
                 assert arm["override"]["ent_coef"] == "auto"
                 assert arm["override"]["target_entropy_fraction"] in (0.98, 0.5)
         rules = spec["rules"]

@@ -11,7 +11,7 @@ import sb3_twodrl.common.on_policy as on_policy
 import sb3_twodrl.common.policies as policies
 import twodrl_envs  # noqa: F401  (registers the Nomad ids)
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
-from twodrl_bench.algorithms.baselines import BatchedA2C, BatchedPPO
+from twodrl_bench.algorithms.baselines import FastA2C, FastPPO
 from twodrl_zoo.vec_env import make_train_env
 
 PPO_ARGS = dict(n_steps=64, batch_size=32, n_epochs=2)
@@ -26,9 +26,9 @@ def _assert_same_parameters(expected: th.nn.Module, actual: th.nn.Module) -> Non
 @pytest.mark.parametrize(
     "stock, fast, env_id, kwargs",
     [
-        (A2C, BatchedA2C, "CartPole-v1", {}),
-        (A2C, BatchedA2C, "Pendulum-v1", {}),  # Box actions: SB3's own forward
-        (PPO, BatchedPPO, "CartPole-v1", PPO_ARGS),
+        (A2C, FastA2C, "CartPole-v1", {}),
+        (A2C, FastA2C, "Pendulum-v1", {}),  # Box actions: SB3's own forward
+        (PPO, FastPPO, "CartPole-v1", PPO_ARGS),
     ],
 )
 def test_fast_stock_algorithm_learns_sb3s_parameters_bitwise(stock, fast, env_id, kwargs) -> None:
@@ -68,7 +68,7 @@ def test_the_speed_layer_changes_no_number_of_the_2d_algorithms(
 def test_fast_a2c_on_the_batched_office_matches_sb3_bitwise() -> None:
     """The batched env's infos, the forward pass, the optimizer: nothing changes a number."""
     models = []
-    for algo in (A2C, BatchedA2C):
+    for algo in (A2C, FastA2C):
         env = make_train_env("NomadOffice-v0", 16, seed=2)
         models.append(algo("MlpPolicy", env, n_steps=5, seed=2, device="cpu").learn(4000))
     _assert_same_parameters(models[0].policy, models[1].policy)
@@ -78,7 +78,7 @@ def test_fast_a2c_on_the_batched_office_matches_sb3_bitwise() -> None:
 
 def test_hooked_layers_are_called_as_modules() -> None:
     calls = []
-    for model in (BatchedA2C("MlpPolicy", "CartPole-v1", seed=0), TwoDimA2C("MlpPolicy", "CartPole-v1", seed=0)):
+    for model in (FastA2C("MlpPolicy", "CartPole-v1", seed=0), TwoDimA2C("MlpPolicy", "CartPole-v1", seed=0)):
         model.policy.mlp_extractor.policy_net[0].register_forward_hook(lambda *args: calls.append(1))
         model.policy.mlp_extractor.value_net[0].register_forward_hook(lambda *args: calls.append(2))
         model.predict(np.zeros(4, dtype=np.float32))

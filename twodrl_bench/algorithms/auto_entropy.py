@@ -55,7 +55,7 @@ from stable_baselines3.common.utils import update_learning_rate
 
 from sb3_twodrl import TwoDimA2C, TwoDimPPO
 from sb3_twodrl.common.validation import check_non_negative, is_real
-from twodrl_bench.algorithms.baselines import BatchedA2C, BatchedPPO, FastActorCriticPolicy
+from twodrl_bench.algorithms.baselines import FastA2C, FastActorCriticPolicy, FastPPO
 
 TARGET_FRACTION = 0.98
 """The default target, as a fraction of the maximum entropy: SAC-Discrete's ``0.98 * -log(1/|A|)``
@@ -279,14 +279,14 @@ class _TwoDimAutoEntropyMixin(AutoEntropyMixin):
         return out
 
 
-class AutoEntropyA2C(_StockAutoEntropyMixin, BatchedA2C):
-    """SB3's ``A2C`` (the bench's :class:`~twodrl_bench.algorithms.baselines.BatchedA2C`) with SAC's learned entropy
+class AutoEntropyA2C(_StockAutoEntropyMixin, FastA2C):
+    """SB3's ``A2C`` (the bench's :class:`~twodrl_bench.algorithms.baselines.FastA2C`) with SAC's learned entropy
     coefficient: ``ent_coef``, ``target_entropy_fraction`` and ``ent_coef_lr`` as :class:`AutoEntropyMixin`'s;
     every other argument is ``A2C``'s."""
 
 
-class AutoEntropyPPO(_StockAutoEntropyMixin, BatchedPPO):
-    """SB3's ``PPO`` (the bench's :class:`~twodrl_bench.algorithms.baselines.BatchedPPO`) with SAC's learned entropy
+class AutoEntropyPPO(_StockAutoEntropyMixin, FastPPO):
+    """SB3's ``PPO`` (the bench's :class:`~twodrl_bench.algorithms.baselines.FastPPO`) with SAC's learned entropy
     coefficient, one step of it per minibatch. ``ent_coef``, ``target_entropy_fraction`` and ``ent_coef_lr``
     as :class:`AutoEntropyA2C`'s; every other argument is ``PPO``'s."""
 
@@ -301,12 +301,3 @@ class AutoEntropyTwoDimPPO(_TwoDimAutoEntropyMixin, TwoDimPPO):
     """``TwoDimPPO`` with SAC's learned entropy coefficient, driven by the entropy of the tempered policy
     that acts (eq. 9), one step of it per minibatch. ``ent_coef``, ``target_entropy_fraction`` and
     ``ent_coef_lr`` as :class:`AutoEntropyA2C`'s; every other argument is ``TwoDimPPO``'s."""
-
-
-AUTO_ENTROPY_ALGOS: dict[str, type] = {
-    "a2c_auto": AutoEntropyA2C,
-    "ppo_auto": AutoEntropyPPO,
-    "twoda2c_auto": AutoEntropyTwoDimA2C,
-    "twodppo_auto": AutoEntropyTwoDimPPO,
-}
-"""The self-tuning arms by the bench's names (``<algo>_auto`` reads ``<algo>``'s settings)."""

@@ -73,17 +73,13 @@ class FastActorCriticPolicy(FastForwardMixin, ActorCriticPolicy):
         self.optimizer = build_optimizer(self, lr_schedule)
 
 
-class BatchedA2C(A2C):
+class FastA2C(A2C):
     """SB3's ``A2C``; its ``MlpPolicy`` is :class:`FastActorCriticPolicy`."""
 
     policy_aliases: ClassVar[dict[str, type[BasePolicy]]] = {**A2C.policy_aliases, "MlpPolicy": FastActorCriticPolicy}
 
 
-class BatchedPPO(PPO):
+class FastPPO(PPO):
     """SB3's ``PPO``; its ``MlpPolicy`` is :class:`FastActorCriticPolicy`."""
 
     policy_aliases: ClassVar[dict[str, type[BasePolicy]]] = {**PPO.policy_aliases, "MlpPolicy": FastActorCriticPolicy}
-
-
-BASELINE_ALGOS: dict[str, type] = {"a2c_batched": BatchedA2C, "ppo_batched": BatchedPPO}
-"""The stock algorithms on the fast path, by the bench's names (``a2c`` and ``ppo`` are SB3's own classes)."""

@@ -289,7 +289,3 @@ class VariantTwoDimPPO(VariantMixin, TwoDimPPO):
         if self.actor_update in ("tempered", "compensated"):
             return log_prob
         return super()._rollout_log_prob(latent_pi, actions, log_prob, inverse_temperature)
-
-
-VARIANT_ALGOS: dict[str, type] = {"twoda2c_variant": VariantTwoDimA2C, "twodppo_variant": VariantTwoDimPPO}
-"""The variant algorithms by the experiment runner's names."""
