@@ -74,15 +74,11 @@ OPTION_VALUES: dict[str, Callable[[str | None], Any]] = {
 
 
 def _options(env_id: str) -> list[str]:
-    """The constructor's own keywords, with :class:`EnvOptions`' fields for its ``**options``."""
+    """The constructor's keywords: ``map``, :class:`EnvOptions`' fields and its robot factory's keyword-only ones."""
     creator = load_env_creator(gym.spec(env_id).entry_point)
-    names = []
-    for parameter in inspect.signature(creator).parameters.values():
-        if parameter.kind is inspect.Parameter.VAR_KEYWORD:
-            names += [option.name for option in fields(EnvOptions)]
-        elif parameter.name != "self":
-            names.append(parameter.name)
-    return names
+    robot = inspect.signature(creator.robot_factory).parameters.values()
+    own = [parameter.name for parameter in robot if parameter.kind is inspect.Parameter.KEYWORD_ONLY]
+    return ["map", *(option.name for option in fields(EnvOptions)), *own]
 
 
 CASES = [(env_id, option) for env_id in NOMAD_IDS for option in _options(env_id)]

@@ -11,15 +11,13 @@ from __future__ import annotations
 
 import functools
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from twodrl_envs.memorable.database import SensorDatabase, load_database
 from twodrl_envs.nomad import sensors
 from twodrl_envs.nomad.batched import BatchedNomadOffice
-from twodrl_envs.nomad.core import OfficeCore, Robot, counter_word, office_core
-from twodrl_envs.nomad.episode import EnvOptions
+from twodrl_envs.nomad.core import OfficeCore, Robot, counter_word
 from twodrl_envs.nomad.office import NomadOfficeEnv
 
 RECORDED = "recorded:"
@@ -90,6 +88,14 @@ class ReplayRobot(Robot):
             raise ValueError(f"options['position'] {tuple(float(v) for v in xy)} is not a recorded lattice cell")
 
 
+def replay_robot(
+    core: OfficeCore, generators: object, *, database: str | Path | SensorDatabase | None = None
+) -> ReplayRobot:
+    """The replay robot of ``NomadOfficeMemorable-v0`` with its option ``database`` (:class:`ReplayRobot`); it
+    draws from no generator."""
+    return ReplayRobot(core, database)
+
+
 class NomadOfficeMemorableEnv(NomadOfficeEnv):
     """The Nomad office task trained from recorded readings (paper section 3.1, MEMORABLE).
 
@@ -100,25 +106,10 @@ class NomadOfficeMemorableEnv(NomadOfficeEnv):
     ``options["position"]`` must be a recorded cell. The robot is a :class:`ReplayRobot` (``env.robot``).
     """
 
-    def __init__(
-        self, map: str | Path | None = None, *, database: str | Path | SensorDatabase | None = None, **options: Any
-    ) -> None:
-        checked = EnvOptions.of(type(self), options)
-        core = office_core(map)
-        self._setup(core, ReplayRobot(core, database), checked)
+    robot_factory = replay_robot
 
 
 class BatchedNomadOfficeMemorable(BatchedNomadOffice):
     """``num_envs`` replay robots in one numpy call; sub-env ``i`` equals a seeded single env."""
 
-    def __init__(
-        self,
-        num_envs: int,
-        map: str | Path | None = None,
-        *,
-        database: str | Path | SensorDatabase | None = None,
-        **options: Any,
-    ) -> None:
-        checked = EnvOptions.of(type(self), options)
-        core = office_core(map)
-        self._setup(num_envs, core, ReplayRobot(core, database), checked)
+    single_env = NomadOfficeMemorableEnv

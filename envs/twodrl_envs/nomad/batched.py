@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from gymnasium import spaces
@@ -23,9 +23,9 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from twodrl_envs import MAX_EPISODE_STEPS
-from twodrl_envs.nomad.core import ROUTE_LABELS, IdealRobot, OfficeCore, Robot, office_core, remembered_route
-from twodrl_envs.nomad.episode import RENDER_MODES, Counters, EnvOptions, Episodes, non_negative, sensor_noise_model
-from twodrl_envs.nomad.sensors import NoiseModel
+from twodrl_envs.nomad.core import ROUTE_LABELS, OfficeCore, Robot, office_core, remembered_route
+from twodrl_envs.nomad.episode import RENDER_MODES, Counters, EnvOptions, Episodes
+from twodrl_envs.nomad.office import NomadOfficeEnv
 
 _ROUTE_NAMES = np.array(ROUTE_LABELS, dtype=object)
 
@@ -41,30 +41,23 @@ class BatchedNomadOffice(VectorEnv):
 
     With ``step_sd_cm`` / ``slip_sd_cm`` the robots leave the lattice: each sub-env draws its move
     noise from its own generator, seeded as a single env's ``np_random``, in the single env's order.
-    The options besides ``num_envs``, ``map`` and the robot's are :class:`~twodrl_envs.nomad.episode.EnvOptions`'
-    (:attr:`options`), the single env's, with ``max_episode_steps`` :data:`~twodrl_envs.MAX_EPISODE_STEPS` unless
-    given. The episode's start, moves, observation and ``info`` are
+    The options besides ``num_envs`` are those of the single env :attr:`single_env` (``map``, its robot's and
+    :class:`~twodrl_envs.nomad.episode.EnvOptions`', :attr:`options`), with ``max_episode_steps``
+    :data:`~twodrl_envs.MAX_EPISODE_STEPS` unless given. The episode's start, moves, observation and ``info`` are
     :class:`~twodrl_envs.nomad.episode.Episodes`' (:attr:`episodes`), and its counters and time limit
     :class:`~twodrl_envs.nomad.episode.Counters`', as the single env's.
     """
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": list(RENDER_MODES)}
 
-    def __init__(
-        self,
-        num_envs: int,
-        map: str | Path | None = None,
-        *,
-        sensor_noise: bool | NoiseModel | None = None,
-        step_sd_cm: float = 0.0,
-        slip_sd_cm: float = 0.0,
-        **options: Any,
-    ) -> None:
-        checked = EnvOptions.of(type(self), options)
+    single_env: ClassVar[type[NomadOfficeEnv]] = NomadOfficeEnv
+    """The single env whose options (its robot's: its ``robot_factory``) this batch takes, and whose robot it moves."""
+
+    def __init__(self, num_envs: int, map: str | Path | None = None, **options: Any) -> None:
+        factory = self.single_env.robot_factory
+        checked, robot_options = EnvOptions.split(type(self), factory, options)
         core = office_core(map)
-        noise = sensor_noise_model(sensor_noise)
-        step_sd, slip_sd = non_negative("step_sd_cm", step_sd_cm), non_negative("slip_sd_cm", slip_sd_cm)
-        self._setup(num_envs, core, IdealRobot(core, noise, step_sd, slip_sd, self._generators), checked)
+        self._setup(num_envs, core, factory(core, self._generators, **robot_options), checked)
 
     def _setup(self, num_envs: int, core: OfficeCore, robot: Robot, options: EnvOptions) -> None:
         """Spaces and state of ``num_envs`` ``robot``s in ``core``'s office (every variant's constructor ends here)."""

@@ -7,14 +7,15 @@ and :class:`Counters` counts their episodes and steps and truncates them at the 
 ``MiniGridEnv.step()`` counts and truncates; :class:`~twodrl_envs.nomad.batched.BatchedNomadOffice` holds N
 robots' state and calls them, and :class:`~twodrl_envs.nomad.office.NomadOfficeEnv` holds one robot's. On the
 lattice the single env takes a Python fast path (:meth:`Episodes.start_one`, :meth:`Episodes.observe_one`,
-:class:`Counter`, :attr:`LatticeOutcomes.rows <twodrl_envs.nomad.core.LatticeOutcomes.rows>`), measured faster
+its counters, :attr:`LatticeOutcomes.rows <twodrl_envs.nomad.core.LatticeOutcomes.rows>`), measured faster
 than arrays of one row and tested equal to them.
 """
 
 from __future__ import annotations
 
+import inspect
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import InitVar, dataclass, fields
 from typing import Any, NamedTuple
 
@@ -29,7 +30,6 @@ from twodrl_envs.nomad.core import (
     Robot,
     check_starts,
     continuous_move,
-    episode_key,
     episode_keys,
     evaluations,
     route_code_at,
@@ -85,7 +85,7 @@ def check_progress(progress: float, robot: Robot) -> None:
 @dataclass(frozen=True)
 class EnvOptions:
     """The options every Nomad env takes besides ``map`` and its robot's (``gym.make(id, **options)``, and
-    ``gym.make_vec`` for the batched envs), checked here, once, when made (:meth:`of`).
+    ``gym.make_vec`` for the batched envs), checked here, once, when made (:meth:`split`).
 
     ``observe_odometry``: the normalised odometry after the 32 readings; ``render_mode``: None or one of the
     env's ``metadata["render_modes"]`` (``render_modes``, not an option); ``observation``: one of
@@ -120,16 +120,23 @@ class EnvOptions:
             raise ValueError(f"max_episode_steps must be a positive int, got {limit!r}")
 
     @classmethod
-    def of(cls, env: type[gym.Env] | type[VectorEnv], options: Mapping[str, Any]) -> EnvOptions:
-        """The checked ``options`` of an ``env`` class's constructor (its render modes its ``metadata``'s).
+    def split(
+        cls, env: type[gym.Env] | type[VectorEnv], robot_factory: Callable[..., Robot], options: Mapping[str, Any]
+    ) -> tuple[EnvOptions, dict[str, Any]]:
+        """The keyword arguments ``options`` of an ``env`` class's constructor, split: its :class:`EnvOptions`,
+        checked (its render modes its ``metadata``'s), and the options of its robot, the keyword-only parameters
+        of ``robot_factory`` (which checks them).
 
-        :raises TypeError: naming a keyword that is no option, as Python names an unexpected keyword argument
+        :raises TypeError: naming a keyword that is neither, as Python names an unexpected keyword argument
         """
-        names = {option.name for option in fields(cls)}
+        own = {option.name for option in fields(cls)}
+        parameters = inspect.signature(robot_factory).parameters.values()
+        robot = {parameter.name for parameter in parameters if parameter.kind is inspect.Parameter.KEYWORD_ONLY}
         for name in options:
-            if name not in names:
+            if name not in own | robot:
                 raise TypeError(f"{env.__name__}.__init__() got an unexpected keyword argument {name!r}")
-        return cls(**options, render_modes=tuple(env.metadata["render_modes"]))
+        checked = cls(**{name: options[name] for name in own & set(options)}, render_modes=env.metadata["render_modes"])
+        return checked, {name: options[name] for name in robot & set(options)}
 
 
 def observation_space(core: OfficeCore, observation: str, observe_odometry: bool) -> spaces.Space:
@@ -171,7 +178,7 @@ class Counters:
     """The counters of ``n`` robots' episodes, arrays ``(n,)``, kept as MiniGrid's ``MiniGridEnv.step()`` keeps its
     step count: ``base`` keys drawn from each robot's seeded generator, ``episode`` numbers since the seeding, the
     episode's noise ``keys`` (derived from both) and the ``steps`` taken in it; ``limit`` is the time limit
-    (``inf``: none). :class:`Counter` is one robot's, in Python values."""
+    (``inf``: none). The single env keeps one robot's in Python values (its fast path), tested equal."""
 
     def __init__(self, n: int, max_episode_steps: int | None) -> None:
         self.base = np.zeros(n, dtype=np.uint64)
@@ -195,30 +202,6 @@ class Counters:
         """Gymnasium's ``truncated`` after a step (counted in :attr:`steps`): the step that reaches the time limit
         truncates an episode that did not terminate."""
         return (self.steps >= self.limit) & ~terminated
-
-
-class Counter:
-    """:class:`Counters` of one robot, in Python values (a single env's step is mostly call overhead); not seeded
-    until :meth:`seed`."""
-
-    __slots__ = ("base", "episode", "key", "limit", "step")
-
-    def __init__(self, max_episode_steps: int | None) -> None:
-        self.base, self.episode, self.key, self.step = 0, -1, 0, 0
-        self.limit = math.inf if max_episode_steps is None else max_episode_steps
-
-    def seed(self, rng: np.random.Generator) -> None:
-        """:meth:`Counters.seed` of one robot."""
-        self.base, self.episode = base_key(rng), -1
-
-    def begin(self) -> None:
-        """:meth:`Counters.begin` of one robot."""
-        self.episode += 1
-        self.key, self.step = episode_key(self.base, self.episode), 0
-
-    def truncated(self, terminated: bool) -> bool:
-        """:meth:`Counters.truncated` of one robot."""
-        return self.step >= self.limit and not terminated
 
 
 class Episodes:

@@ -7,17 +7,43 @@ episode state and the Gymnasium API; :mod:`twodrl_envs.nomad.batched` holds N ro
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from twodrl_envs.nomad.core import ROUTE_LABELS, IdealRobot, OfficeCore, Robot, office_core, remembered_route
-from twodrl_envs.nomad.episode import Counter, EnvOptions, Episodes, non_negative, sensor_noise_model
+from twodrl_envs.nomad.core import (
+    ROUTE_LABELS,
+    IdealRobot,
+    OfficeCore,
+    Robot,
+    episode_key,
+    office_core,
+    remembered_route,
+)
+from twodrl_envs.nomad.episode import EnvOptions, Episodes, base_key, non_negative, sensor_noise_model
 from twodrl_envs.nomad.sensors import NoiseModel
 from twodrl_envs.nomad.task import task_facts
+
+
+def ideal_robot(
+    core: OfficeCore,
+    generators: Callable[[], Sequence[np.random.Generator]],
+    *,
+    sensor_noise: bool | NoiseModel | None = None,
+    step_sd_cm: float = 0.0,
+    slip_sd_cm: float = 0.0,
+) -> IdealRobot:
+    """The ideal robot of ``NomadOffice-v0`` in ``core``'s office with its options, checked: ``sensor_noise``
+    (:func:`~twodrl_envs.nomad.episode.sensor_noise_model`), ``step_sd_cm`` and ``slip_sd_cm`` (finite, >= 0); its
+    move noise draws from ``generators()``."""
+    noise = sensor_noise_model(sensor_noise)
+    step_sd, slip_sd = non_negative("step_sd_cm", step_sd_cm), non_negative("slip_sd_cm", slip_sd_cm)
+    return IdealRobot(core, noise, step_sd, slip_sd, generators)
 
 
 class NomadOfficeEnv(gym.Env):
@@ -47,32 +73,28 @@ class NomadOfficeEnv(gym.Env):
     dead-reckoned (commanded) position, as wheel odometry does.
 
     The robot is :attr:`robot` (:class:`~twodrl_envs.nomad.core.Robot`): the realistic and replay envs
-    are this env with another robot. The options besides ``map`` and the robot's are
-    :class:`~twodrl_envs.nomad.episode.EnvOptions`' (:attr:`options`), checked there. The episode's start, moves,
-    observation and ``info`` are :class:`~twodrl_envs.nomad.episode.Episodes`' (:attr:`episodes`), on the lattice
-    by its Python fast path; its counters and the time limit a :class:`~twodrl_envs.nomad.episode.Counter`'s: with
-    ``max_episode_steps`` the step that reaches it returns ``truncated=True`` unless the episode terminated, as the
-    batched env's sub-envs do; without it (``gym.make`` takes ``max_episode_steps``), the time limit is the
-    ``TimeLimit`` wrapper's that ``gym.make`` puts around the env (the registered 300 steps, or the one given),
-    which flags the same step, and a terminating one too.
+    are this env with another robot (:attr:`robot_factory`). The options besides ``map`` are
+    :class:`~twodrl_envs.nomad.episode.EnvOptions`' (:attr:`options`) and the robot's (here :func:`ideal_robot`'s),
+    each checked once, there. The episode's start, moves, observation and ``info`` are
+    :class:`~twodrl_envs.nomad.episode.Episodes`' (:attr:`episodes`), on the lattice by its Python fast path,
+    which also keeps :class:`~twodrl_envs.nomad.episode.Counters`' counters and time limit of one robot in Python
+    values: with ``max_episode_steps`` the step that reaches it returns ``truncated=True`` unless the episode
+    terminated, as the batched env's sub-envs do. Without it (``gym.make`` takes ``max_episode_steps`` itself) the
+    time limit is that of the ``TimeLimit`` wrapper ``gym.make`` puts around the env (the registered 300 steps, or
+    the one given), which flags the same step, a terminating one too.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
 
-    def __init__(
-        self,
-        map: str | Path | None = None,
-        *,
-        sensor_noise: bool | NoiseModel | None = None,
-        step_sd_cm: float = 0.0,
-        slip_sd_cm: float = 0.0,
-        **options: Any,
-    ) -> None:
-        checked = EnvOptions.of(type(self), options)
+    robot_factory: ClassVar[Callable[..., Robot]] = ideal_robot
+    """Makes the env's robot: ``robot_factory(core, generators, **robot_options)``, its keyword-only parameters the
+    env's options besides :class:`~twodrl_envs.nomad.episode.EnvOptions`' (here ``sensor_noise``, ``step_sd_cm``
+    and ``slip_sd_cm``: :func:`ideal_robot`)."""
+
+    def __init__(self, map: str | Path | None = None, **options: Any) -> None:
+        checked, robot_options = EnvOptions.split(type(self), type(self).robot_factory, options)
         core = office_core(map)
-        noise = sensor_noise_model(sensor_noise)
-        step_sd, slip_sd = non_negative("step_sd_cm", step_sd_cm), non_negative("slip_sd_cm", slip_sd_cm)
-        self._setup(core, IdealRobot(core, noise, step_sd, slip_sd, self._generators), checked)
+        self._setup(core, type(self).robot_factory(core, self._generators, **robot_options), checked)
 
     def _generators(self) -> tuple[np.random.Generator]:
         """The generator the ideal robot's move noise draws from: this env's ``np_random``."""
@@ -104,7 +126,9 @@ class NomadOfficeEnv(gym.Env):
         self.action_space = spaces.Discrete(4)
         self._outcomes = self.episodes.outcomes.rows if self.episodes.outcomes is not None else []
         self._observe_one, self._info_of = self.episodes.observe_one, self.episodes.info  # bound once: the fast path
-        self._counter = Counter(options.max_episode_steps)
+        # the counters (Counters' of one robot, in Python values: the fast path) and the time limit (None: none)
+        self._base_key, self._episode, self._key, self._step = 0, -1, 0, 0
+        self._limit = math.inf if options.max_episode_steps is None else options.max_episode_steps
         self._cell = core.start_cell
         self._pos = np.array(core.office.start, dtype=np.float64)
         self._odo = self._pos.copy()
@@ -112,7 +136,7 @@ class NomadOfficeEnv(gym.Env):
         self._trajectory: list[tuple[float, float]] = []
 
     def _counters(self) -> tuple[np.ndarray, np.ndarray]:
-        return np.array([self._counter.key], dtype=np.uint64), np.array([self._counter.step], dtype=np.int64)
+        return np.array([self._key], dtype=np.uint64), np.array([self._step], dtype=np.int64)
 
     def _pose_observation(self) -> np.ndarray:
         return self.episodes.observe_poses(self._pos[None], self._odo[None], *self._counters())[0]
@@ -123,20 +147,20 @@ class NomadOfficeEnv(gym.Env):
     ) -> tuple[np.ndarray | int, dict[str, Any]]:
         """Start an episode at ``options["position"] = (x_cm, y_cm)``, else as ``starts`` says (the map's start)."""
         super().reset(seed=seed)
-        counter = self._counter
-        if seed is not None or counter.episode < 0:
-            counter.seed(self.np_random)
-        counter.begin()
+        if seed is not None or self._episode < 0:  # Counters.seed, then Counters.begin, of one robot
+            self._base_key, self._episode = base_key(self.np_random), -1
+        self._episode += 1
+        self._key, self._step = episode_key(self._base_key, self._episode), 0
         options = {} if options is None else options
         if not isinstance(options, dict) or set(options) - {"position"}:
             raise ValueError(f"options may only contain 'position', got {options!r}")
         if "position" in options:
             self._pos, self._cell, self._route = self.episodes.start_state(options["position"])
         else:
-            self._pos, self._cell, self._route = self.episodes.start_one(counter.key)
+            self._pos, self._cell, self._route = self.episodes.start_one(self._key)
         self._odo = self._pos.copy() if self._cell < 0 else self.core.lattice.cells[self._cell]
         self._trajectory = [tuple(self._pos)]
-        observation = self._observe_one(self._cell, counter.key, 0) if self._cell >= 0 else self._pose_observation()
+        observation = self._observe_one(self._cell, self._key, 0) if self._cell >= 0 else self._pose_observation()
         position = (float(self._pos[0]), float(self._pos[1]))
         return observation, self._info_of(0.0, False, ROUTE_LABELS[self._route], position, False)
 
@@ -145,15 +169,14 @@ class NomadOfficeEnv(gym.Env):
         a = int(action)
         if not 0 <= a < 4:
             raise ValueError(f"action must be 0 (N), 1 (E), 2 (S) or 3 (W), got {action!r}")
-        counter = self._counter
-        counter.step += 1
+        self._step += 1
         if self._cell >= 0:
             self._cell, collided, goal, code, reward, punishment = self._outcomes[self._cell][a]
             if not collided:
                 self._pos = self._odo = self.core.lattice.cells[self._cell]
             if code:  # the route memory (core.remembered_route) of one robot
                 self._route = code
-            observation = self._observe_one(self._cell, counter.key, counter.step)
+            observation = self._observe_one(self._cell, self._key, self._step)
         else:
             move = self.episodes.move_off_lattice(self._pos[None], self._odo[None], np.array([a]), *self._counters())
             self._pos, self._odo = move.positions[0], move.odometry[0]
@@ -167,7 +190,8 @@ class NomadOfficeEnv(gym.Env):
             punishment, collided, ROUTE_LABELS[self._route], (float(self._pos[0]), float(self._pos[1])), goal
         )
         terminated = collided or goal
-        return observation, reward, terminated, counter.truncated(terminated), info
+        # the time limit's rule (Counters.truncated) of one robot
+        return observation, reward, terminated, self._step >= self._limit and not terminated, info
 
     def render(self) -> np.ndarray | None:
         """Top-down RGB frame: walls, start, goal, trajectory, robot and its sonar cones."""

@@ -49,8 +49,8 @@ from typing import Any
 import numpy as np
 
 from twodrl_envs.nomad import sensors
-from twodrl_envs.nomad.core import OfficeCore, Robot, counter_word, office_core
-from twodrl_envs.nomad.episode import EnvOptions, non_negative
+from twodrl_envs.nomad.core import OfficeCore, Robot, counter_word
+from twodrl_envs.nomad.episode import non_negative
 from twodrl_envs.nomad.geometry import MOVES_CM, REGION_KEYS, ROBOT_RADIUS_CM, STEP_CM, OfficeMap
 from twodrl_envs.nomad.office import NomadOfficeEnv
 from twodrl_envs.nomad.realistic import RealisticModel
@@ -429,6 +429,18 @@ class TopDownView:
         self.renderer.close()
 
 
+def mujoco_robot(
+    core: OfficeCore,
+    generators: object,
+    *,
+    model: RealisticModel | None = None,
+    artifacts: bool = True,
+    heading_sd_rad: float = 0.01,
+) -> MuJoCoRobot:
+    """The robot of ``NomadOfficeMuJoCo-v0`` with its options (:class:`MuJoCoRobot`); it draws from no generator."""
+    return MuJoCoRobot(core, model, artifacts=artifacts, heading_sd_rad=heading_sd_rad)
+
+
 class NomadOfficeMuJoCoEnv(NomadOfficeEnv):
     """``NomadOfficeMuJoCo-v0``: the office task on the MuJoCo robot (:class:`MuJoCoRobot`).
 
@@ -444,18 +456,10 @@ class NomadOfficeMuJoCoEnv(NomadOfficeEnv):
     metadata = {"render_modes": list(RENDER_MODES), "render_fps": 10}
     robot: MuJoCoRobot
 
-    def __init__(
-        self,
-        map: str | Path | None = None,
-        *,
-        model: RealisticModel | None = None,
-        artifacts: bool = True,
-        heading_sd_rad: float = 0.01,
-        **options: Any,
-    ) -> None:
-        checked = EnvOptions.of(type(self), options)
-        core = office_core(map)
-        self._setup(core, MuJoCoRobot(core, model, artifacts=artifacts, heading_sd_rad=heading_sd_rad), checked)
+    robot_factory = mujoco_robot
+
+    def __init__(self, map: str | Path | None = None, **options: Any) -> None:
+        super().__init__(map, **options)
         self._view: TopDownView | None = None
         self._no_view = False
 

@@ -29,15 +29,13 @@ from __future__ import annotations
 import json
 import sys
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from twodrl_envs.nomad import sensors
 from twodrl_envs.nomad.batched import BatchedNomadOffice
-from twodrl_envs.nomad.core import OfficeCore, Robot, office_core
-from twodrl_envs.nomad.episode import EnvOptions
+from twodrl_envs.nomad.core import OfficeCore, Robot
 from twodrl_envs.nomad.geometry import MOVES_CM, ROBOT_RADIUS_CM, OfficeMap
 from twodrl_envs.nomad.office import NomadOfficeEnv
 from twodrl_envs.nomad.sensors import BEARINGS, IR_MAX_CM, N_SONAR, SONAR_MAX_CM, SONAR_MIN_CM, counter_hash
@@ -393,6 +391,12 @@ class RealisticRobot(Robot):
         return self.model.displacement(actions, keys, steps)
 
 
+def realistic_robot(core: OfficeCore, generators: object, *, model: RealisticModel | None = None) -> RealisticRobot:
+    """The stand-in robot of ``NomadOfficeReal-v0`` with its option ``model`` (None: :class:`RealisticModel`'s
+    defaults); counter-based, it draws from no generator."""
+    return RealisticRobot(core, model)
+
+
 class NomadOfficeRealEnv(NomadOfficeEnv):
     """``NomadOfficeReal-v0``: the office task on the stand-in robot of :class:`RealisticModel`.
 
@@ -403,10 +407,7 @@ class NomadOfficeRealEnv(NomadOfficeEnv):
     The robot is a :class:`RealisticRobot` (``env.robot``).
     """
 
-    def __init__(self, map: str | Path | None = None, *, model: RealisticModel | None = None, **options: Any) -> None:
-        checked = EnvOptions.of(type(self), options)
-        core = office_core(map)
-        self._setup(core, RealisticRobot(core, model), checked)
+    robot_factory = realistic_robot
 
 
 class BatchedNomadOfficeReal(BatchedNomadOffice):
@@ -416,9 +417,4 @@ class BatchedNomadOfficeReal(BatchedNomadOffice):
     ``gym.make("twodrl_envs:NomadOfficeReal-v0")`` reset with seed ``s`` and reset again after every episode.
     """
 
-    def __init__(
-        self, num_envs: int, map: str | Path | None = None, *, model: RealisticModel | None = None, **options: Any
-    ) -> None:
-        checked = EnvOptions.of(type(self), options)
-        core = office_core(map)
-        self._setup(num_envs, core, RealisticRobot(core, model), checked)
+    single_env = NomadOfficeRealEnv
