@@ -189,9 +189,10 @@ class NomadOfficeEnv(gym.Env):
         info = self._info_of(
             punishment, collided, ROUTE_LABELS[self._route], (float(self._pos[0]), float(self._pos[1])), goal
         )
+        if self._step < self._limit:  # the time limit's rule (Counters.truncated) of one robot
+            return observation, reward, collided or goal, False, info
         terminated = collided or goal
-        # the time limit's rule (Counters.truncated) of one robot
-        return observation, reward, terminated, self._step >= self._limit and not terminated, info
+        return observation, reward, terminated, not terminated, info
 
     def render(self) -> np.ndarray | None:
         """Top-down RGB frame: walls, start, goal, trajectory, robot and its sonar cones."""
