@@ -38,6 +38,7 @@ import gymnasium as gym
 import numpy as np
 
 import twodrl_envs  # noqa: F401  (registers the env IDs)
+from sb3_twodrl.callbacks import SUCCESS_THRESHOLD
 from twodrl_envs.memorable.database import SensorDatabase, load_database, save_database
 from twodrl_envs.memorable.recording import record_database, shortest_paths
 from twodrl_envs.nomad.core import OfficeCore, office_core
@@ -100,7 +101,7 @@ def chosen_runs(rows: list[dict[str, str]], algo: str) -> list[tuple[str, int, s
         if row["algo"] != algo or "_2x" in row["file"]:
             continue
         key = (row["map"], int(row["seed"]))
-        if float(row["goal_rate"]) < 0.8:
+        if float(row["goal_rate"]) < SUCCESS_THRESHOLD:
             chosen[key] = f"failed in budget {int(row['budget']):,}"
         elif int(row["steps"]) > LATE * int(row["budget"]):
             chosen[key] = f"learned late ({int(row['steps']):,} of {int(row['budget']):,})"
@@ -154,14 +155,14 @@ def stage_checks(args: argparse.Namespace, plt: Any) -> dict[str, Any]:
             returns = np.array([c["mean_return"] for c in record["checks"]])
             ax_rate.plot(steps, rates, "-", color=style, lw=1.2, label=name)
             ax_return.plot(steps, returns, "-", color=style, lw=1.0, label=name)
-            passed = np.flatnonzero(rates >= 0.8)
+            passed = np.flatnonzero(rates >= SUCCESS_THRESHOLD)
             entry[name] = {
                 "source": record["file"],
                 "checks": len(rates),
                 "last_step": int(at[-1]),
                 "first_pass": None if len(passed) == 0 else int(at[passed[0]]),
                 "learned_at": record.get("learned_at"),
-                "relapses": int(np.sum(rates[passed[0] :] < 0.8)) if len(passed) else None,
+                "relapses": int(np.sum(rates[passed[0] :] < SUCCESS_THRESHOLD)) if len(passed) else None,
                 "time_limit_checks": int(np.sum((rates == 0.0) & (returns < -2.0))),
                 "collision_checks": int(np.sum((rates == 0.0) & (returns >= -2.0))),
             }
@@ -755,7 +756,7 @@ def stage_settings(args: argparse.Namespace, rows: list[dict[str, str]]) -> dict
             continue
         steps = f"{int(row['steps']) / 1e6:.2f}M"
         outcomes.setdefault((row["map"], arm), {})[int(row["seed"])] = (
-            steps if float(row["goal_rate"]) >= 0.8 else f"failed {steps}"
+            steps if float(row["goal_rate"]) >= SUCCESS_THRESHOLD else f"failed {steps}"
         )
     offices = []
     for m in maps:
@@ -783,7 +784,7 @@ def rank_correlations(offices: list[dict[str, Any]], rows: list[dict[str, str]])
         if row["algo"] != "twoda2c" or arm not in ("B", "2B"):
             continue
         key = (row["map"], int(row["seed"]))
-        learned = float(row["goal_rate"]) >= 0.8
+        learned = float(row["goal_rate"]) >= SUCCESS_THRESHOLD
         steps[key] = min(steps.get(key, never), int(row["steps"]) if learned else never)
     used = [o for o in offices if (o["map"], 1) in steps and (o["map"], 2) in steps]
     y = [np.mean(np.log([steps[(o["map"], 1)], steps[(o["map"], 2)]])) for o in used]

@@ -43,7 +43,7 @@ from twodrl_bench.checkpoint import set_rng_state
 from twodrl_bench.experiment import Job, with_seed
 from twodrl_bench.protocol import LEARNING, METRICS, ROUTES, trial_seed
 from twodrl_bench.trials import run_test_trials, transfer_columns
-from twodrl_zoo.hyperparams import evaluate
+from twodrl_zoo.hyperparams import python_expression
 from twodrl_zoo.vec_env import make_test_env, make_train_env
 
 Row = dict[str, Any]
@@ -134,7 +134,7 @@ def _new_model(job: Job) -> BaseAlgorithm:
     set_random_seed(job.seed)
     hp = copy.deepcopy(job.arm.hyperparams)  # SB3 fills in policy_kwargs in place (A2C's RMSprop)
     if isinstance(hp.get("policy_kwargs"), str):
-        hp["policy_kwargs"] = evaluate(hp["policy_kwargs"])
+        hp["policy_kwargs"] = python_expression(hp["policy_kwargs"])
     n_envs = int(hp.pop("n_envs", 1))
     experiment, protocol = job.experiment, job.protocol
     env = make_train_env(experiment.env, n_envs, job.seed, protocol.vec_env, job.env_kwargs)

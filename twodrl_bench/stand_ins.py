@@ -9,7 +9,7 @@ from typing import Any
 
 from stable_baselines3.common.base_class import BaseAlgorithm
 
-from twodrl_bench.trials import _outcomes, tally
+from twodrl_bench.trials import env_outcomes, tally
 
 STAND_INS = ("NomadOfficeMuJoCo-v0", "NomadOfficeReal-v0")
 """The stand-in robots' env IDs: physics first, then the artifact model."""
@@ -29,7 +29,7 @@ def stand_in_trials(
     from twodrl_zoo.zoo import import_gym_packages
 
     import_gym_packages()  # the env packages that register the IDs
-    return {env_id: tally(_outcomes(model, env_id, n, seed, dict(env_kwargs or {}))) for env_id in STAND_INS}
+    return {env_id: tally(env_outcomes(model, env_id, n, seed, dict(env_kwargs or {}))) for env_id in STAND_INS}
 
 
 ROBOT_COLUMNS = {"NomadOfficeMuJoCo-v0": "mujoco", "NomadOfficeReal-v0": "real"}

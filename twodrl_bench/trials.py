@@ -73,7 +73,7 @@ def tally(outcomes: list[str]) -> dict[str, int]:
     }
 
 
-def _outcomes(model: BaseAlgorithm, env_id: str, n: int, seed: int, env_kwargs: dict[str, Any]) -> list[str]:
+def env_outcomes(model: BaseAlgorithm, env_id: str, n: int, seed: int, env_kwargs: dict[str, Any]) -> list[str]:
     """Outcomes of ``n`` deterministic trials on ``env_id`` (sub-env ``i`` seeded ``seed + i``), with the test
     settings the env derives from ``env_kwargs`` (:func:`twodrl_bench.settings.test_env_kwargs`)."""
     from twodrl_zoo.vec_env import make_test_env
@@ -93,8 +93,8 @@ def transfer_columns(
     ``env_kwargs`` go to both envs (``observe_odometry: False``: sensors only) unless ``transfer["env_kwargs"]``
     gives the transfer env its own."""
     seed = transfer.get("seed", TRANSFER_SEED)
-    own = tally(_outcomes(model, env, OWN_TRIALS, seed + 10**4, env_kwargs))
-    outcomes = _outcomes(model, transfer["env"], transfer["trials"], seed, transfer.get("env_kwargs", env_kwargs))
+    own = tally(env_outcomes(model, env, OWN_TRIALS, seed + 10**4, env_kwargs))
+    outcomes = env_outcomes(model, transfer["env"], transfer["trials"], seed, transfer.get("env_kwargs", env_kwargs))
     target = tally(outcomes)
     return {
         "transfer_env": transfer["env"],

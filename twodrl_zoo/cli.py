@@ -63,11 +63,11 @@ def train(argv: list[str] | None = None) -> None:
     import rl_zoo3.train
 
     from twodrl_zoo.manager import ExperimentManager
-    from twodrl_zoo.zoo import _has_option, prepare_zoo_argv, run_zoo_entry
+    from twodrl_zoo.zoo import has_option, prepare_zoo_argv, run_zoo_entry
 
     argv = prepare_zoo_argv(sys.argv[1:] if argv is None else argv, packaged_conf=True)
     options = check_command_line("sb3-twodrl-train", argv)
-    if not _has_option(argv, "--num-threads"):
+    if not has_option(argv, "--num-threads"):
         argv += ["--num-threads", "1"]
     zoo_manager = rl_zoo3.train.ExperimentManager
     rl_zoo3.train.ExperimentManager = ExperimentManager  # type: ignore[misc]
@@ -75,7 +75,7 @@ def train(argv: list[str] | None = None) -> None:
         run_zoo_entry("sb3-twodrl-train", argv, rl_zoo3.train.train)
     finally:
         rl_zoo3.train.ExperimentManager = zoo_manager  # type: ignore[misc]
-    if not _has_option(argv, "-optimize", "--optimize-hyperparameters"):
+    if not has_option(argv, "-optimize", "--optimize-hyperparameters"):
         report_goal_rate(argv, options)
 
 
@@ -85,19 +85,19 @@ def check_command_line(prog: str, argv: list[str]) -> dict[str, dict[str, Any]]:
     one line naming what is wrong."""
     import gymnasium as gym
 
-    from twodrl_zoo.zoo import _dict_options, _option_value
+    from twodrl_zoo.zoo import dict_options, option_value
 
     try:
-        _, given = _dict_options(argv)
+        _, given = dict_options(argv)
     except (NameError, SyntaxError, ValueError) as error:
         sys.exit(
             f"{prog}: a key:value option is not a Python literal ({error}); quote strings twice, "
             """e.g. --env-kwargs map:'"my_office.json"'"""
         )
-    budget = _option_value(argv, "-n", "--n-timesteps")
+    budget = option_value(argv, "-n", "--n-timesteps")
     if budget is not None and not (budget.lstrip("+").isdigit() and int(budget) > 0):
         sys.exit(f"{prog}: -n/--n-timesteps must be a positive number of steps, got {budget!r}")
-    env_id = _option_value(argv, "--env")
+    env_id = option_value(argv, "--env")
     if env_id is not None and env_id not in gym.registry:
         close = difflib.get_close_matches(env_id, list(gym.registry), n=1)
         sys.exit(f"{prog}: env {env_id!r} is not registered" + (f"; did you mean {close[0]!r}?" if close else ""))
@@ -130,9 +130,9 @@ def report_goal_rate(argv: list[str], given: dict[str, dict[str, Any]], episodes
 
     from twodrl_zoo.evaluation import goal_rate, run_episodes
     from twodrl_zoo.manager import CHECKS_FILE, SAVED
-    from twodrl_zoo.zoo import _option_value
+    from twodrl_zoo.zoo import option_value
 
-    algo, env_id = _option_value(argv, "--algo") or "ppo", _option_value(argv, "--env") or "CartPole-v1"
+    algo, env_id = option_value(argv, "--algo") or "ppo", option_value(argv, "--env") or "CartPole-v1"
     if not SAVED:
         return None
     log_path = SAVED[-1]
@@ -146,7 +146,7 @@ def report_goal_rate(argv: list[str], given: dict[str, dict[str, Any]], episodes
         env_id,
         n_envs=1,
         stats_path=stats_path,
-        seed=int(_option_value(argv, "--seed") or 0),
+        seed=int(option_value(argv, "--seed") or 0),
         log_dir=None,
         should_render=False,
         hyperparams=hyperparams,
@@ -237,10 +237,10 @@ def enjoy(argv: list[str] | None = None) -> None:
     get the window; without a screen (:func:`has_screen`) it replays headless too and says so.
     """
     require_extra("zoo", *ZOO_MODULES)
-    from twodrl_zoo.zoo import _has_option, prepare_zoo_argv, run_zoo_entry
+    from twodrl_zoo.zoo import has_option, prepare_zoo_argv, run_zoo_entry
 
     argv = prepare_zoo_argv(sys.argv[1:] if argv is None else argv)
-    if not _has_option(argv, "-f", "--folder"):
+    if not has_option(argv, "-f", "--folder"):
         argv += ["-f", "logs"]
     check_command_line("sb3-twodrl-enjoy", argv)
     argv = replay_options(argv)
@@ -269,7 +269,7 @@ def enjoy(argv: list[str] | None = None) -> None:
             file=sys.stderr,
         )
         argv.append("--no-render")
-    if not _has_option(argv, "--num-threads"):
+    if not has_option(argv, "--num-threads"):
         argv += ["--num-threads", "1"]
     run_zoo_entry("sb3-twodrl-enjoy", argv, zoo_enjoy)
 
@@ -291,19 +291,19 @@ def replay_options(argv: list[str]) -> list[str]:
     from rl_zoo3.utils import get_latest_run_id
 
     from twodrl_zoo.hyperparams import derived_settings, resolve
-    from twodrl_zoo.zoo import _dict_options, _option_value
+    from twodrl_zoo.zoo import dict_options, option_value
 
-    algo, env_id = _option_value(argv, "--algo"), _option_value(argv, "--env")
-    folder = _option_value(argv, "-f", "--folder") or "logs"
+    algo, env_id = option_value(argv, "--algo"), option_value(argv, "--env")
+    folder = option_value(argv, "-f", "--folder") or "logs"
     if algo is None or env_id is None:
         return argv
-    exp_id = int(_option_value(argv, "--exp-id") or 0) or get_latest_run_id(os.path.join(folder, algo), env_id)
+    exp_id = int(option_value(argv, "--exp-id") or 0) or get_latest_run_id(os.path.join(folder, algo), env_id)
     args_file = os.path.join(folder, algo, f"{env_id}_{exp_id}", env_id, "args.yml")
     if not os.path.isfile(args_file):
         return argv
     with open(args_file) as f:
         trained = (yaml.load(f, Loader=yaml.UnsafeLoader) or {}).get("env_kwargs") or {}
-    rest, given = _dict_options(argv)
+    rest, given = dict_options(argv)
     test = resolve({}, derived_settings(env_id, trained), env_kwargs=trained).eval_env_kwargs
     options = {**test, **given["--env-kwargs"]}
     if not options:

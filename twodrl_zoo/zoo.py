@@ -135,11 +135,13 @@ def register_zoo(algos: Mapping[str, type] | None = None) -> None:
         hyperparams_opt.HYPERPARAMS_CONVERTER[key] = convert_two_dim_params
 
 
-def _has_option(argv: list[str], *names: str) -> bool:
+def has_option(argv: list[str], *names: str) -> bool:
+    """Whether ``argv`` gives any of the flags ``names`` (``--flag value`` or ``--flag=value``)."""
     return any(a in names or any(a.startswith(n + "=") for n in names) for a in argv)
 
 
-def _option_value(argv: list[str], *names: str) -> str | None:
+def option_value(argv: list[str], *names: str) -> str | None:
+    """The value ``argv`` gives the first of the flags ``names`` it has, None where it gives none."""
     for i, a in enumerate(argv):
         for n in names:
             if a == n and i + 1 < len(argv):
@@ -173,8 +175,8 @@ def prepare_zoo_argv(argv: list[str], packaged_conf: bool = False) -> list[str]:
     register_zoo()
     import_gym_packages()
     argv = list(argv)
-    algo = _option_value(argv, "--algo") or "ppo"
-    if packaged_conf and algo in PACKAGED and not _has_option(argv, "-conf", "--conf-file"):
+    algo = option_value(argv, "--algo") or "ppo"
+    if packaged_conf and algo in PACKAGED and not has_option(argv, "-conf", "--conf-file"):
         argv += ["--conf-file", str(hyperparams_path(algo))]
     return argv
 
@@ -192,7 +194,7 @@ def run_zoo_entry(prog: str, argv: list[str], entry: Callable[[], Any]) -> None:
 _DICT_OPTIONS = ("--env-kwargs", "--eval-env-kwargs", "--hyperparams")
 
 
-def _dict_options(argv: list[str]) -> tuple[list[str], dict[str, dict[str, Any]]]:
+def dict_options(argv: list[str]) -> tuple[list[str], dict[str, dict[str, Any]]]:
     """``argv`` without its rl-zoo3 ``key:value`` options, and those options parsed as rl-zoo3 parses them."""
     import argparse
 

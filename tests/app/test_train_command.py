@@ -12,7 +12,7 @@ pytest.importorskip("rl_zoo3")
 import twodrl_envs  # noqa: F401  (registers the Nomad IDs)
 from twodrl_zoo.cli import check_command_line, replay_options
 from twodrl_zoo.hyperparams import derived_settings, hyperparams_path, read_entry, resolve
-from twodrl_zoo.zoo import _dict_options
+from twodrl_zoo.zoo import dict_options
 
 
 @pytest.mark.parametrize(
@@ -50,10 +50,10 @@ def test_enjoy_replays_with_the_task_s_test_options_under_the_user_s(tmp_path: P
     argv = ["--algo", "twoda2c", "--env", "NomadOffice-v0", "-f", str(tmp_path / "logs")]
     derived = derived_settings("NomadOffice-v0", {"map": "generated:S:3"})
     assert derived is not None and derived.env_kwargs["starts"] == "uniform"  # what training used
-    _, given = _dict_options(replay_options(argv))
+    _, given = dict_options(replay_options(argv))
     assert given["--env-kwargs"] == {"map": "generated:S:3", **derived.eval_env_kwargs}
     assert given["--env-kwargs"]["starts"] == "map"
-    _, given = _dict_options(replay_options([*argv, "--env-kwargs", "max_episode_steps:50"]))
+    _, given = dict_options(replay_options([*argv, "--env-kwargs", "max_episode_steps:50"]))
     assert given["--env-kwargs"] == {"map": "generated:S:3", "starts": "map", "max_episode_steps": 50}
 
 

@@ -31,7 +31,7 @@ from typing import Any
 from sb3_twodrl.callbacks import SUCCESS_THRESHOLD
 from twodrl_bench.intervals import welch_ci, wilson
 from twodrl_bench.reports import Part
-from twodrl_bench.reports.benchmark import _cell, _diff
+from twodrl_bench.reports.benchmark import mean_cell, welch_cell
 from twodrl_bench.reports.factorial import run_metrics
 
 Row = dict[str, Any]
@@ -145,7 +145,7 @@ def _descriptive(values: dict[str, dict[str, list[float]]], arm: str, key: str) 
     everywhere = {v for arm_values in values.values() for v in arm_values.get(key, [])}
     mine = [v for v in values[arm].get(key, []) if math.isfinite(v)]
     if len(everywhere) > MAX_PATHS:
-        return _cell(mine, 2)
+        return mean_cell(mine, 2)
     return ", ".join(f"{v:g}: {mine.count(v)}" for v in sorted(set(mine)))
 
 
@@ -175,7 +175,7 @@ def task_report(part: Part) -> str:
     lines = [f"### {part.part or spec['name']}", "", f"| arm | {' | '.join(head)} |", "|---|" + "---|" * len(head)]
     for arm in spec["arms"]:
         if arm in values:
-            cells = [_cell(values[arm]["return"], digits), _cell(values[arm]["events"], 3)]
+            cells = [mean_cell(values[arm]["return"], digits), mean_cell(values[arm]["events"], 3)]
             if learned:
                 k, n = int(sum(values[arm]["learned"])), len(values[arm]["learned"])
                 lo, hi = wilson(k, n)
@@ -194,8 +194,8 @@ def task_report(part: Part) -> str:
     comparisons.append((rules["claim"], rules["fixed"]))
     for a, b in dict.fromkeys(comparisons):
         if a in values and b in values:
-            ret = _diff(values[a]["return"], values[b]["return"], digits)
-            ev = _diff(values[a]["events"], values[b]["events"], 3)
+            ret = welch_cell(values[a]["return"], values[b]["return"], digits)
+            ev = welch_cell(values[a]["events"], values[b]["events"], 3)
             lines.append(f"| {a} - {b} | {ret} | {ev} |")
     if lines[-1] == "|---|---|---|":  # no pair with rows on both sides yet
         lines = lines[:-3]
@@ -218,7 +218,7 @@ def course_table(rows: Sequence[Row]) -> list[str]:
         cells = []
         for p in COURSE_AT:
             points = [run[p // 10 - 1] for run in runs if run[p // 10 - 1] is not None]
-            cells += [_cell([point[1] for point in points], 3), _cell([point[2] for point in points], 3)]
+            cells += [mean_cell([point[1] for point in points], 3), mean_cell([point[2] for point in points], 3)]
         lines.append(f"| {arm} | {' | '.join(cells)} |")
     return lines
 

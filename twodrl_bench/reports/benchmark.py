@@ -55,7 +55,8 @@ def task_of(spec: Spec) -> str:
     return spec["protocol"].get("task") or spec["env"]
 
 
-def _cell(values: Sequence[float], digits: int = 1) -> str:
+def mean_cell(values: Sequence[float], digits: int = 1) -> str:
+    """``mean [low, high] (n=N)``: the mean of ``values`` with its 95% Student t interval; ``-`` for none."""
     mean, half, n = mean_ci(values)
     if n == 0:
         return "-"
@@ -64,7 +65,8 @@ def _cell(values: Sequence[float], digits: int = 1) -> str:
     return f"{mean:.{digits}f} [{mean - half:.{digits}f}, {mean + half:.{digits}f}] (n={n})"
 
 
-def _diff(a: Sequence[float], b: Sequence[float], digits: int = 1) -> str:
+def welch_cell(a: Sequence[float], b: Sequence[float], digits: int = 1) -> str:
+    """``+d [low, high]``: the difference of the means of ``a`` and ``b`` with its 95% Welch interval."""
     if len(a) < 2 or len(b) < 2:
         return "-"
     d, h = welch_ci(a, b)
@@ -126,10 +128,13 @@ def comparison_lines(spec: Spec, rows: Sequence[Row]) -> list[str]:
         ret_2d, ret_st = [r[ret_key] for r in two], [r[ret_key] for r in base]
         ev_2d = [r[ev_key] for r in two] if ev_key else []
         ev_st = [r[ev_key] for r in base] if ev_key else []
-        events = f"{_cell(ev_st, 3)} | {_cell(ev_2d, 3)} | {_diff(ev_2d, ev_st, 3)}" if ev_key else "- | - | -"
+        events = (
+            f"{mean_cell(ev_st, 3)} | {mean_cell(ev_2d, 3)} | {welch_cell(ev_2d, ev_st, 3)}" if ev_key else "- | - | -"
+        )
         budget = f"{base[0]['n_timesteps']:,}" if base else "-"
         lines.append(
-            f"| {task} | {budget} | {stock} | {_cell(ret_st)} | {arm} | {_cell(ret_2d)} | {_diff(ret_2d, ret_st)} "
+            f"| {task} | {budget} | {stock} | {mean_cell(ret_st)} | {arm} | {mean_cell(ret_2d)} "
+            f"| {welch_cell(ret_2d, ret_st)} "
             f"| {events} | {verdict(ret_2d, ret_st, ev_2d, ev_st, rules['min_seeds'])} "
             f"| {rules.get('published', {}).get(stock, '-')} |"
         )

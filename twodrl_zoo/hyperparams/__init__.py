@@ -36,9 +36,9 @@ __all__ = [
     "Resolved",
     "derived_settings",
     "env_class",
-    "evaluate",
     "hyperparams_path",
     "load",
+    "python_expression",
     "read_entry",
     "resolve",
     "task_facts",
@@ -118,7 +118,7 @@ class Hyperparams:
         return made
 
 
-def evaluate(text: str) -> Any:
+def python_expression(text: str) -> Any:
     """A Python expression of a hyperparameter file, evaluated as rl-zoo3 does (``nn`` and ``th`` in scope)."""
     import torch as th
     from torch import nn
@@ -243,10 +243,10 @@ def load(
         if key in kwargs:
             kwargs[key] = _schedule(key, kwargs[key])
     if isinstance(kwargs.get("policy_kwargs"), str):
-        kwargs["policy_kwargs"] = evaluate(kwargs["policy_kwargs"])
+        kwargs["policy_kwargs"] = python_expression(kwargs["policy_kwargs"])
     normalize = entry.get("normalize", False)
     if isinstance(normalize, str):
-        normalize = evaluate(normalize)
+        normalize = python_expression(normalize)
     if normalize is True:
         normalize = {}
     elif normalize is False:
