@@ -283,12 +283,13 @@ def table(rows: list[dict[str, str]]) -> str:
     database = all(r.get("db_goal_rate") for r in rows)
     robot = all(r.get("real_goal_rate") for r in rows)
     extra = (" final test and robot within 0.2 |" if database else "") + (
-        " on the artifact model >= 0.8 | simulator policy on MuJoCo >= 0.8 | survey s | import s | training s |"
+        f" on the artifact model >= {SUCCESS_THRESHOLD} | simulator policy on MuJoCo >= {SUCCESS_THRESHOLD} "
+        "| survey s | import s | training s |"
         if robot
         else ""
     )
     lines = [
-        "| size | algo | offices at goal rate >= 0.8 [95% interval] | share | stopped as learned "
+        f"| size | algo | offices at goal rate >= {SUCCESS_THRESHOLD} [95% interval] | share | stopped as learned "
         f"| wall s, median (max) |{extra}",
         "| --- | --- | --- | --- | --- | --- |" + " --- |" * extra.count("|"),
     ]
@@ -465,7 +466,7 @@ def plot(rows: list[dict[str, str]], path: Path) -> None:
                     marker=marker,
                     facecolors=color if good else "none",
                     edgecolors=color,
-                    label=f"{algo}" + ("" if good else ", goal rate < 0.8"),
+                    label=f"{algo}" + ("" if good else f", goal rate < {SUCCESS_THRESHOLD}"),
                 )
     axes.set_xlabel("shortest path (moves)")
     axes.set_ylabel("wall seconds of the command")
