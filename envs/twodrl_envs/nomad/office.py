@@ -7,7 +7,7 @@ episode state and the Gymnasium API; :mod:`twodrl_envs.nomad.batched` holds N ro
 
 from __future__ import annotations
 
-import math
+import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, ClassVar
@@ -126,9 +126,10 @@ class NomadOfficeEnv(gym.Env):
         self.action_space = spaces.Discrete(4)
         self._outcomes = self.episodes.outcomes.rows if self.episodes.outcomes is not None else []
         self._observe_one, self._info_of = self.episodes.observe_one, self.episodes.info  # bound once: the fast path
-        # the counters (Counters' of one robot, in Python values: the fast path) and the time limit (None: none)
+        # the counters (Counters' of one robot, in Python values: the fast path) and the time limit (an int: a
+        # faster comparison than with math.inf; none: one never reached)
         self._base_key, self._episode, self._key, self._step = 0, -1, 0, 0
-        self._limit = math.inf if options.max_episode_steps is None else options.max_episode_steps
+        self._limit = sys.maxsize if options.max_episode_steps is None else options.max_episode_steps
         self._cell = core.start_cell
         self._pos = np.array(core.office.start, dtype=np.float64)
         self._odo = self._pos.copy()
