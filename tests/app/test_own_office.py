@@ -15,6 +15,8 @@ from pathlib import Path
 
 import pytest
 
+from tests.helpers.doc_run import run_doc_commands
+
 ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "own_office.md"
 
@@ -50,16 +52,12 @@ def robot_loop() -> str:
 def test_the_doc_run_as_written_learns_its_office(tmp_path: Path) -> None:
     text = DOC.read_text()
     (tmp_path / "my_office.json").write_text(text.split("```json\n", 1)[1].split("```", 1)[0])
-    rates, printed = [], []
-    for command in doc_commands():
-        out = subprocess.run(["bash", "-c", command], cwd=tmp_path, capture_output=True, text=True, timeout=900)
-        assert out.returncode == 0, (command, out.stdout[-2000:], out.stderr[-3000:])
-        if command.startswith("sb3-twodrl-export"):
-            assert command == printed[-1]  # the doc's export line is the one its training printed
-        printed += re.findall(r"^sb3-twodrl-train: export: (.*)$", out.stdout, re.MULTILINE)
-        rates += [float(r) for r in re.findall(r"^sb3-twodrl-train: goal rate ([0-9.]+)", out.stdout, re.MULTILINE)]
+    rates: list[float] = []
+    commands = doc_commands()
+    for command, stdout in zip(commands, run_doc_commands(commands, tmp_path, timeout=900), strict=True):
+        rates += [float(r) for r in re.findall(r"^sb3-twodrl-train: goal rate ([0-9.]+)", stdout, re.MULTILINE)]
         if command.startswith("sb3-twodrl-enjoy"):  # the replay's own line (training prints its checks' too)
-            rates += [float(r) / 100 for r in re.findall(r"^Success rate: ([0-9.]+)%", out.stdout, re.MULTILINE)]
+            rates += [float(r) / 100 for r in re.findall(r"^Success rate: ([0-9.]+)%", stdout, re.MULTILINE)]
     loop = subprocess.run([sys.executable, "-c", robot_loop()], cwd=tmp_path, capture_output=True, text=True)
     assert loop.returncode == 0, loop.stderr[-3000:]
     rates += [float(r) for r in re.findall(r"^goal rate on the stand-in robot: ([0-9.]+)", loop.stdout, re.MULTILINE)]

@@ -17,6 +17,8 @@ from pathlib import Path
 
 import pytest
 
+from tests.helpers.doc_run import run_doc_commands
+
 ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "robot_path.md"
 MAP = "my_office.json"
@@ -67,15 +69,8 @@ def test_the_doc_run_as_written_drives_the_mujoco_robot_to_the_goal(tmp_path: Pa
         f"sb3-twodrl-map --seed 0 --size S --out {MAP}", shell=True, cwd=tmp_path, capture_output=True, text=True
     )
     assert made.returncode == 0, made.stderr[-2000:]
-    printed: list[str] = []
-    for command in doc_commands():
-        out = subprocess.run(["bash", "-c", command], cwd=tmp_path, capture_output=True, text=True, timeout=1200)
-        assert out.returncode == 0, (command, out.stdout[-2000:], out.stderr[-3000:])
-        if command.startswith("sb3-twodrl-export"):
-            assert command == printed[-1]  # the doc's export line is the one its training printed
-        printed += re.findall(r"^sb3-twodrl-train: export: (.*)$", out.stdout, re.MULTILINE)
-        if command.startswith("sb3-twodrl-replay-bag"):
-            assert re.search(r"^wrote office_bag_replayed: \d+ messages copied, \d+ moves", out.stdout, re.MULTILINE)
+    outputs = run_doc_commands(doc_commands(), tmp_path)
+    assert re.search(r"^wrote office_bag_replayed: \d+ messages copied, \d+ moves", outputs[-1], re.MULTILINE)
     loop = subprocess.run([sys.executable, "-c", robot_loop()], cwd=tmp_path, capture_output=True, text=True)
     assert loop.returncode == 0, loop.stderr[-3000:]
     rate = re.search(r"^goal rate on the MuJoCo robot: ([0-9.]+)", loop.stdout, re.MULTILINE)
