@@ -19,8 +19,9 @@ Keys this job reads, beside the fields every spec has:
   e.g. rl-zoo3's ``CartPole-v1`` entry for ``CliffWalkingSplit-v1``, which has none of its own.
 - ``protocol.task`` (optional): the rows' ``task`` label (default: the spec's ``env``).
 - ``protocol.check_every`` (optional, 0: none): timesteps between goal checks, each ``protocol.check_episodes``
-  deterministic episodes on a fresh evaluation env (:class:`GoalChecks`); the row's ``checks`` and
-  ``first_goal_at`` (the first check's timestep at which an episode reached the goal, ``info["is_success"]``).
+  deterministic episodes on a fresh evaluation env (:class:`~twodrl_bench.timestep_callbacks.GoalChecks`); the
+  row's ``checks`` and ``first_goal_at`` (the first check's timestep at which an episode reached the goal,
+  ``info["is_success"]``).
 - ``protocol.keep_learned`` (optional, false): as ``sb3-twodrl-train`` does (:mod:`twodrl_zoo.manager`), keep the
   policy of the best check (:class:`sb3_twodrl.callbacks.GoalRecord`) and stop training once
   :data:`~sb3_twodrl.callbacks.PATIENCE` checks in a row reach :data:`~sb3_twodrl.callbacks.SUCCESS_THRESHOLD`; the
@@ -50,7 +51,6 @@ from __future__ import annotations
 
 import argparse
 import copy
-import csv
 import importlib
 import json
 import math
@@ -61,26 +61,27 @@ from typing import Any
 
 import numpy as np
 from stable_baselines3.common.base_class import BaseAlgorithm
-from stable_baselines3.common.callbacks import BaseCallback
-from stable_baselines3.common.monitor import Monitor, ResultsWriter
 
-from sb3_twodrl.callbacks import PATIENCE, SUCCESS_THRESHOLD, GoalCheck, GoalRecord
 from twodrl_bench import jobs
 from twodrl_bench.experiment import Arm, Experiment, Job, with_seed
 from twodrl_bench.protocol import TimestepsProtocol
 from twodrl_bench.settings import STUDY_REVISION, check_entry, timesteps_entry
 from twodrl_bench.settings import settings_file as settings_file_of
 from twodrl_bench.stand_ins import stand_in_columns, stand_in_trials
+from twodrl_bench.timestep_callbacks import Checkpoints, GoalChecks, restore_monitors
+from twodrl_bench.timestep_measures import (
+    EVAL_SEED,
+    eval_env,
+    evaluate,
+    first_goal,
+    learning_curve,
+    training_episodes,
+)
 from twodrl_bench.trials import transfer_columns
-from twodrl_zoo.evaluation import goal_rate, run_episodes
 from twodrl_zoo.hyperparams import derived_settings, resolve
 from twodrl_zoo.manager import ExperimentManager
 
 Row = dict[str, Any]
-EVAL_SEED = 10**6
-"""Seed of the evaluation env, plus the training seed: apart from the training seeds."""
-CURVE_BINS = 20
-"""Learning-curve points: training episodes binned by the timestep at which they ended."""
 
 
 def check_protocol(protocol: dict[str, Any]) -> TimestepsProtocol:
@@ -105,187 +106,10 @@ def resolve_arm(arm: dict[str, Any], env: str, protocol: dict[str, Any]) -> dict
     return timesteps_entry(arm, env, protocol)
 
 
-def training_episodes(run_dir: Path, n_envs: int, events: str | None) -> np.ndarray:
-    """Every training episode as ``(timestep it ended at, return, punishment events)``, sorted by timestep.
-
-    The Monitor of sub-env ``i`` writes ``<run_dir>/<i>.monitor.csv``; the sub-envs step together,
-    so an episode that ends at a sub-env's k-th step ends at timestep ``k * n_envs``.
-    """
-    rows = []
-    for i in range(n_envs):
-        with (run_dir / f"{i}.monitor.csv").open() as f:
-            next(f)  # the JSON header
-            steps = 0
-            for record in csv.DictReader(f):
-                steps += int(record["l"])
-                rows.append((steps * n_envs, float(record["r"]), _number(record[events]) if events else 0.0))
-    return np.array(sorted(rows), dtype=np.float64).reshape(-1, 3)
-
-
-def _number(text: str) -> float:
-    """A ``Monitor`` CSV field as a number (a bool info key is written ``True``/``False``)."""
-    return {"True": 1.0, "False": 0.0}[text] if text in ("True", "False") else float(text)
-
-
-def learning_curve(episodes: np.ndarray, n_timesteps: int, bins: int = CURVE_BINS) -> list[list[float]]:
-    """Per bin of ``n_timesteps / bins`` steps: ``[end timestep, mean return, events per episode]`` (NaN if empty)."""
-    edges = np.linspace(0, n_timesteps, bins + 1)
-    index = np.clip(np.searchsorted(edges, episodes[:, 0], side="left") - 1, 0, bins - 1)
-    curve = []
-    for b in range(bins):
-        inside = episodes[index == b]
-        mean = inside.mean(axis=0) if len(inside) else np.full(3, math.nan)
-        curve.append([float(edges[b + 1]), float(mean[1]), float(mean[2])])
-    return curve
-
-
-def evaluate(model: Any, env: Any, episodes: int, events: str | None) -> dict[str, float]:
-    """Mean return, length and punishment events of ``episodes`` deterministic episodes in a row on the one-env
-    ``env`` (:func:`twodrl_zoo.evaluation.run_episodes`), the share with an event, the share that reached the
-    goal (:func:`twodrl_zoo.evaluation.goal_rate`, NaN where the env does not say) and the reward per step over all
-    their steps (paper section 3.4.1)."""
-    ran = run_episodes(model, env, per_env=episodes)
-    r = np.array([episode.episode_return for episode in ran])
-    n = np.array([episode.length for episode in ran])
-    e = np.array([float(episode.info.get(events, 0.0)) if events else 0.0 for episode in ran])
-    return {
-        "final_return": float(r.mean()),
-        "final_return_std": float(r.std()),
-        "final_length": float(n.mean()),
-        "final_events": float(e.mean()),
-        "final_event_share": float(np.mean(e > 0)),
-        "final_success_share": goal_rate(ran),
-        "final_reward_per_step": float(r.sum() / n.sum()),
-    }
-
-
-def eval_env(env: str, entry: dict[str, Any], env_kwargs: dict[str, Any], seed: int, stats: Path | None = None) -> Any:
-    """A one-env evaluation VecEnv of ``env`` with ``env_kwargs``, the entry's wrapper, seeded ``seed``; with the
-    run's ``VecNormalize`` statistics ``stats`` (frozen) where the entry normalises."""
-    from rl_zoo3 import utils as zoo_utils
-    from stable_baselines3.common.env_util import make_vec_env
-    from stable_baselines3.common.vec_env import VecNormalize
-
-    made = make_vec_env(
-        env, n_envs=1, seed=seed, wrapper_class=zoo_utils.get_wrapper_class(entry), env_kwargs=env_kwargs
-    )
-    if stats is not None and stats.exists():
-        made = VecNormalize.load(str(stats), made)
-        made.training, made.norm_reward = False, False
-    return made
-
-
-class GoalChecks(BaseCallback):
-    """Every ``protocol.check_every`` timesteps, at a rollout's start, ``protocol.check_episodes`` deterministic
-    episodes on a fresh evaluation env seeded ``EVAL_SEED + seed`` (:func:`evaluate`); ``[timestep, share that
-    reached the goal]`` appended to ``state["checks"]`` (checkpointed with the job, so a resumed run checks as an
-    uninterrupted one). The checks' time is part of the row's ``wall_s``.
-
-    With ``protocol.keep_learned``, the policy of the best check is kept in ``state["kept"]`` (its timestep, goal
-    rate, mean return and parameters, checkpointed too) and loaded back when training ends; training stops once
-    the checks say the task is learned (:class:`sb3_twodrl.callbacks.GoalRecord`)."""
-
-    def __init__(self, job: Job, state: dict[str, Any], make_env: Any):
-        super().__init__()
-        self.job, self.state, self.make_env = job, state, make_env
-        self.record = GoalRecord(SUCCESS_THRESHOLD, PATIENCE)
-        for timestep, share, mean_return in state.get("kept_checks", []):
-            self.record.add(GoalCheck(timestep, share, mean_return))
-        self._stop = False
-
-    def _on_rollout_start(self) -> None:
-        every = self.job.protocol.check_every
-        checks = self.state.setdefault("checks", [])
-        due = (checks[-1][0] // every + 1) * every if checks else every
-        if not every or self.num_timesteps < due:
-            return
-        env = self.make_env()
-        try:
-            result = evaluate(self.model, env, self.job.protocol.check_episodes, None)
-        finally:
-            env.close()
-        checks.append([self.num_timesteps, result["final_success_share"]])
-        if not self.job.protocol.keep_learned:
-            return
-        check = GoalCheck(self.num_timesteps, result["final_success_share"], result["final_return"])
-        self.state.setdefault("kept_checks", []).append([check.timesteps, check.goal_rate, check.mean_return])
-        if self.record.add(check):
-            self.state["kept"] = {**vars(check), "parameters": copy.deepcopy(self.model.policy.state_dict())}
-        if self.record.learned:
-            self.state["learned_at"] = self.num_timesteps
-            self._stop = True
-
-    def _on_step(self) -> bool:
-        return not self._stop
-
-    def _on_training_end(self) -> None:
-        kept = self.state.get("kept")
-        if kept is not None:
-            self.model.policy.load_state_dict(kept["parameters"])
-
-
-def first_goal(checks: list[list[float]]) -> float:
-    """The timestep of the first check at which an episode reached the goal, NaN if none did."""
-    return next((float(t) for t, share in checks if share > 0), math.nan)
-
-
-def _monitors(model: BaseAlgorithm) -> list[Monitor]:
-    """The ``Monitor`` of each training env of ``model``, in env order."""
-    monitors = []
-    for env in model.get_env().unwrapped.envs:
-        while not isinstance(env, Monitor):
-            env = env.env
-        monitors.append(env)
-    return monitors
-
-
-class Checkpoints(BaseCallback):
-    """Checkpoints the job every ``protocol.checkpoint_every`` timesteps, at a rollout's start (a clean boundary:
-    the update of the last rollout done), with the sizes of the ``Monitor`` files then; the files' open writers
-    are left out of the checkpoint (:func:`restore_monitors` reopens them)."""
-
-    def __init__(self, job: Job, state: dict[str, Any], budget: int):
-        super().__init__()
-        self.job, self.state, self.budget = job, state, budget
-        self._clock = time.perf_counter()
-
-    def _on_rollout_start(self) -> None:
-        every, done = self.job.protocol.checkpoint_every, self.num_timesteps
-        if not every or done - self.state["checkpoint_at"] < every or done >= self.budget:
-            return
-        self.state["checkpoint_at"] = done
-        monitors = _monitors(self.model)
-        writers = [m.results_writer for m in monitors]
-        files = [w.file_handler.name for w in writers]
-        elapsed = self.state["elapsed"] + time.perf_counter() - self._clock
-        try:
-            for monitor in monitors:
-                monitor.results_writer = None  # an open file: not pickled
-            extra = {**self.state, "elapsed": elapsed, "monitors": [(f, Path(f).stat().st_size) for f in files]}
-            jobs.save(self.job, self.model, extra)
-        finally:
-            for monitor, writer in zip(monitors, writers, strict=True):
-                monitor.results_writer = writer
-        with jobs.progress_path(self.job.out_dir, self.job.name).open("a") as f:
-            f.write(f"{done}\n")
-
-    def _on_step(self) -> bool:
-        return True
-
-
-def restore_monitors(model: BaseAlgorithm, files: list[tuple[str, int]]) -> None:
-    """Cut each training env's ``Monitor`` file back to its size at the checkpoint and append to it again."""
-    for monitor, (name, size) in zip(_monitors(model), files, strict=True):
-        with open(name, "r+b") as f:
-            f.truncate(size)
-        keys = (*monitor.reset_keywords, *monitor.info_keywords)
-        monitor.results_writer = ResultsWriter(name, extra_keys=keys, override_existing=False)
-
-
 def _new_model(job: Job, entry: dict[str, Any], log: Path) -> tuple[BaseAlgorithm, Path]:
     """``job``'s model and env as ``sb3-twodrl-train`` makes them (seed, :class:`twodrl_zoo.manager.ExperimentManager`)
     from the resolved ``entry``, without goal checks and with rl-zoo3's envs (a ``Monitor`` per env, whose files
-    :func:`training_episodes` reads); its run folder."""
+    :func:`~twodrl_bench.timestep_measures.training_episodes` reads); its run folder."""
     from stable_baselines3.common.utils import set_random_seed
 
     algo, env, seed = job.arm.algo, job.experiment.env, job.seed
@@ -314,8 +138,8 @@ def _new_model(job: Job, entry: dict[str, Any], log: Path) -> tuple[BaseAlgorith
 
 def run(job: Job) -> list[Row]:
     """Train ``job``'s arm with the train command's ``ExperimentManager`` (its logs in
-    ``<out_dir>/zoo/<arm>_seed<seed>``), checkpointed (:class:`Checkpoints`) and resumed
-    (:func:`twodrl_bench.jobs.resume`) as every job is, then evaluate the final model; its one row.
+    ``<out_dir>/zoo/<arm>_seed<seed>``), checkpointed (:class:`~twodrl_bench.timestep_callbacks.Checkpoints`) and
+    resumed (:func:`twodrl_bench.jobs.resume`) as every job is, then evaluate the final model; its one row.
 
     The row: ``task``, ``env``, ``arm``, ``seed``, ``n_timesteps``; the final evaluation's ``final_return`` (mean),
     ``final_return_std``, ``final_length``, ``final_events`` (per episode), ``final_event_share``; over the

@@ -17,14 +17,8 @@ from tests.helpers.recording_cpu import RECORDING_KERNELS, WHY
 
 pytest.importorskip("rl_zoo3")
 
-from twodrl_bench.timesteps import (
-    check_protocol,
-    learning_curve,
-    resolve_arm,
-    run_job,
-    settings_file,
-    training_episodes,
-)
+from twodrl_bench.timestep_measures import learning_curve, training_episodes
+from twodrl_bench.timesteps import check_protocol, resolve_arm, run_job, settings_file
 
 OLD_ROWS = Path(__file__).parents[1] / "data" / "timesteps_old_rows.json"
 TASKS = ("CliffWalking", "LunarLander", "LavaGap", "CartPole", "Acrobot", "Pendulum")
