@@ -110,6 +110,36 @@ def doc_database_path() -> tuple[list[str], str]:
     return commands, loop
 
 
+def _shell(folder: str, command: str) -> tuple[str, float]:
+    """``command`` run by bash in ``folder``: its stdout and seconds; a failure raises, naming the command."""
+    clock = time.perf_counter()
+    done = subprocess.run(["bash", "-c", command], cwd=folder, capture_output=True, text=True)
+    if done.returncode != 0:
+        raise RuntimeError(f"{command} failed:\n{done.stdout[-2000:]}\n{done.stderr[-2000:]}")
+    return done.stdout, time.perf_counter() - clock
+
+
+def _run_doc(folder: str, commands: list[str]) -> tuple[str, dict[str, float]]:
+    """A doc's ``commands`` run in order in ``folder``, its export line replaced by the one the train command printed
+    (the doc says to run that line): their stdout, and each program's seconds."""
+    out, seconds = "", {}
+    for command in commands:
+        printed = EXPORT.findall(out)
+        if command.startswith("sb3-twodrl-export") and printed:
+            command = printed[-1]
+        stdout, seconds[command.split()[0]] = _shell(folder, command)
+        out += stdout
+    return out, seconds
+
+
+def _drive(folder: str, loop: str, result: re.Pattern[str]) -> float:
+    """A doc's robot loop run in ``folder``: the goal rate it printed (``result``)."""
+    done = subprocess.run([sys.executable, "-c", loop], cwd=folder, capture_output=True, text=True)
+    if done.returncode != 0:
+        raise RuntimeError(f"the robot loop failed:\n{done.stderr[-2000:]}")
+    return float(result.search(done.stdout).group(1))  # type: ignore[union-attr]
+
+
 def run_database(
     map_: str, commit: str, cpu: str, algo: str = "twoda2c", extra: list[str] = (), checks: Path | None = None
 ) -> dict[str, object]:
@@ -122,22 +152,11 @@ def run_database(
     ]
     with tempfile.TemporaryDirectory() as folder:
         clock = time.perf_counter()
-        out = ""
-        for command in [f"sb3-twodrl-map --seed {map_seed} --size {size} --out my_office.json", *commands]:
-            printed = EXPORT.findall(out)
-            if command.startswith("sb3-twodrl-export") and printed:
-                command = printed[-1]  # the doc: run the export line the train command printed
-            done = subprocess.run(["bash", "-c", command], cwd=folder, capture_output=True, text=True)
-            if done.returncode != 0:
-                raise RuntimeError(f"{command} failed:\n{done.stdout[-2000:]}\n{done.stderr[-2000:]}")
-            out += done.stdout
-        drive = subprocess.run([sys.executable, "-c", loop], cwd=folder, capture_output=True, text=True)
-        if drive.returncode != 0:
-            raise RuntimeError(f"the robot loop failed:\n{drive.stderr[-2000:]}")
+        out, _ = _run_doc(folder, [f"sb3-twodrl-map --seed {map_seed} --size {size} --out my_office.json", *commands])
+        rate = _drive(folder, loop, STAND_IN)
         wall = time.perf_counter() - clock
         (record_file,) = Path(folder).glob("logs/*/*/goal_checks.json")
         record = json.loads(record_file.read_text())
-    rate = float(STAND_IN.search(drive.stdout).group(1))  # type: ignore[union-attr]
     facts = task_facts("NomadOffice-v0", {"map": map_})
     assert facts is not None
     seed = int(re.search(r"^Seed: (\d+)$", out, re.MULTILINE).group(1))  # type: ignore[union-attr]
@@ -182,39 +201,20 @@ def run_robot_path(
     commands, loop = doc_robot_path(MAP_FILE if not paper else "office")
     commands = [_with(c.replace("twoda2c", algo), extra) if "-train " in c else c for c in commands]
     with tempfile.TemporaryDirectory() as folder:
-
-        def shell(command: str) -> tuple[str, float]:
-            clock = time.perf_counter()
-            done = subprocess.run(["bash", "-c", command], cwd=folder, capture_output=True, text=True)
-            if done.returncode != 0:
-                raise RuntimeError(f"{command} failed:\n{done.stdout[-2000:]}\n{done.stderr[-2000:]}")
-            return done.stdout, time.perf_counter() - clock
-
-        def drive(code: str) -> float:
-            done = subprocess.run([sys.executable, "-c", code], cwd=folder, capture_output=True, text=True)
-            if done.returncode != 0:
-                raise RuntimeError(f"the robot loop failed:\n{done.stderr[-2000:]}")
-            return float(MUJOCO.search(done.stdout).group(1))  # type: ignore[union-attr]
-
         clock = time.perf_counter()
         if not paper:
             _, size, map_seed = map_.split(":")
-            shell(f"sb3-twodrl-map --seed {map_seed} --size {size} --out {MAP_FILE}")
-        out, seconds = "", {}
-        for command in commands:
-            if command.startswith("sb3-twodrl-export"):
-                command = EXPORT.findall(out)[-1]  # the doc: run the export line the train command printed
-            printed, seconds[command.split()[0]] = shell(command)
-            out += printed
-        rate = drive(loop)
+            commands = [f"sb3-twodrl-map --seed {map_seed} --size {size} --out {MAP_FILE}", *commands]
+        out, seconds = _run_doc(folder, commands)
+        rate = _drive(folder, loop, MUJOCO)
         wall = time.perf_counter() - clock
         (record_file,) = Path(folder).glob("logs/*/*/goal_checks.json")
         record = json.loads(record_file.read_text())
-        real = drive(loop.replace("NomadOfficeMuJoCo-v0", "NomadOfficeReal-v0"))
+        real = _drive(folder, loop.replace("NomadOfficeMuJoCo-v0", "NomadOfficeReal-v0"), MUJOCO)
         on_map = "" if paper else f""" --env-kwargs map:'"{MAP_FILE}"'"""
-        simulator, _ = shell(f"sb3-twodrl-train --algo {algo} --env NomadOffice-v0{on_map}")
-        shell(EXPORT.findall(simulator)[-1].replace(" policy.onnx ", " simulator.onnx "))
-        sim = drive(loop.replace('"policy.onnx"', '"simulator.onnx"'))
+        simulator, _ = _shell(folder, f"sb3-twodrl-train --algo {algo} --env NomadOffice-v0{on_map}")
+        _shell(folder, EXPORT.findall(simulator)[-1].replace(" policy.onnx ", " simulator.onnx "))
+        sim = _drive(folder, loop.replace('"policy.onnx"', '"simulator.onnx"'), MUJOCO)
     facts = task_facts("NomadOffice-v0", {} if paper else {"map": map_})
     seed = int(re.search(r"^Seed: (\d+)$", out, re.MULTILINE).group(1))  # type: ignore[union-attr]
     if checks is not None:
