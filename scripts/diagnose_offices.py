@@ -733,7 +733,7 @@ def office_settings(map_name: str) -> dict[str, Any]:
         "farthest_start": facts["farthest_start"],
         "start_cells": len(starts),
         "starts_as_far_share": float(np.mean(starts >= moves)),
-        "time_limit": facts["train_options"]["max_episode_steps"],
+        "time_limit": facts["time_limit"],
         "gamma": gamma,
         "goal_value_at_start": None if gamma is None else round(gamma**moves, 3),
         "budget": derived.hyperparams["n_timesteps"] if derived else None,

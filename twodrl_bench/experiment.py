@@ -24,6 +24,7 @@ from typing import Any
 from twodrl_bench.protocol import Protocol, TimestepsProtocol, positive_int, protocol_of
 from twodrl_bench.settings import check_constants, class_defaults, epoch_entry, settings_file, timesteps_entry
 from twodrl_bench.spec import FIELDS, Spec, diff, load_spec, validate
+from twodrl_zoo.hyperparams import resolve
 
 RUN_OPTIONS = ("checkpoint_every", "save_model", "tensorboard")
 """Protocol keys that change what a run keeps, not its rows: free to change between invocations."""
@@ -53,7 +54,7 @@ class Arm:
             hyperparams = timesteps_entry(arm, env, protocol.as_dict())
         else:
             entry = epoch_entry(settings_file(arm["algo"], arm["settings"]), env)
-            hyperparams = {**entry, **arm["override"]}
+            hyperparams = resolve(entry, None, arm["override"]).entry
             check_constants(hyperparams, f"arms.{name}")
         defaults = class_defaults(arm["algo"], hyperparams)
         return cls(name, arm["algo"], dict(arm["override"]), arm["settings"], hyperparams, defaults)

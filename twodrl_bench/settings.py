@@ -68,10 +68,8 @@ def timesteps_entry(arm: dict[str, Any], env: str, protocol: dict[str, Any]) -> 
     """
     if not isinstance(arm, dict) or not isinstance(arm.get("algo"), str):
         raise ValueError(f"arm must be a mapping with an 'algo' name, got {arm!r}")
-    entry = {
-        **read_entry(settings_file(arm["algo"], arm.get("settings", "packaged")), protocol.get("entry") or env),
-        **(arm.get("override") or {}),
-    }
+    written = read_entry(settings_file(arm["algo"], arm.get("settings", "packaged")), protocol.get("entry") or env)
+    entry = resolve(written, None, arm.get("override")).entry
     if protocol.get("events"):
         entry["monitor_kwargs"] = monitor_kwargs(protocol["events"])
     check_entry(arm["algo"], entry, protocol)

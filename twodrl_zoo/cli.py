@@ -85,6 +85,7 @@ def check_command_line(prog: str, argv: list[str]) -> dict[str, dict[str, Any]]:
     one line naming what is wrong."""
     import gymnasium as gym
 
+    from twodrl_zoo.hyperparams import resolve
     from twodrl_zoo.zoo import dict_options, option_value
 
     try:
@@ -102,11 +103,12 @@ def check_command_line(prog: str, argv: list[str]) -> dict[str, dict[str, Any]]:
         close = difflib.get_close_matches(env_id, list(gym.registry), n=1)
         sys.exit(f"{prog}: env {env_id!r} is not registered" + (f"; did you mean {close[0]!r}?" if close else ""))
     if env_id is not None:
-        for option in ("--env-kwargs", "--eval-env-kwargs"):
+        resolved = resolve({}, None, env_kwargs=given["--env-kwargs"], eval_env_kwargs=given["--eval-env-kwargs"])
+        for option, options in (("--env-kwargs", resolved.env_kwargs), ("--eval-env-kwargs", resolved.eval_env_kwargs)):
             if option == "--eval-env-kwargs" and not given[option]:
                 continue  # the env of --env-kwargs, made just above
             try:
-                gym.make(env_id, **{**given["--env-kwargs"], **given[option]}).close()
+                gym.make(env_id, **options).close()
             except (ValueError, TypeError, FileNotFoundError) as error:
                 sys.exit(f"{prog}: {env_id} with {option} {given[option]}: {error}")
     return given
@@ -129,6 +131,7 @@ def report_goal_rate(argv: list[str], given: dict[str, dict[str, Any]], episodes
     from rl_zoo3.utils import ALGOS, create_test_env, get_saved_hyperparams
 
     from twodrl_zoo.evaluation import goal_rate, run_episodes
+    from twodrl_zoo.hyperparams import resolve
     from twodrl_zoo.manager import CHECKS_FILE, SAVED
     from twodrl_zoo.zoo import option_value
 
@@ -150,7 +153,10 @@ def report_goal_rate(argv: list[str], given: dict[str, dict[str, Any]], episodes
         log_dir=None,
         should_render=False,
         hyperparams=hyperparams,
-        env_kwargs=record["test_env_kwargs"] or {**given["--env-kwargs"], **given["--eval-env-kwargs"]},
+        env_kwargs=record["test_env_kwargs"]
+        or resolve(
+            {}, None, env_kwargs=given["--env-kwargs"], eval_env_kwargs=given["--eval-env-kwargs"]
+        ).eval_env_kwargs,
     )
     model = ALGOS[algo].load(model_path, device="cpu")
     rate = goal_rate(run_episodes(model, env, per_env=episodes))
@@ -282,9 +288,10 @@ def has_screen() -> bool:
 
 
 def replay_options(argv: list[str]) -> list[str]:
-    """``argv`` of an enjoy command with ``--env-kwargs`` holding the test options of the run's task: those
-    :func:`twodrl_zoo.hyperparams.resolve` gives the training options saved in the run's ``args.yml``, under the
-    ones ``argv`` gives. Unchanged where the run or its ``args.yml`` is not found (rl-zoo3 then says so)."""
+    """``argv`` of an enjoy command with ``--env-kwargs`` holding the test options of the run's task, as
+    :func:`twodrl_zoo.hyperparams.resolve` orders them: the training options saved in the run's ``args.yml`` < the
+    task's test options < the ``--env-kwargs`` of ``argv`` (the user's test options). Unchanged where the run or its
+    ``args.yml`` is not found (rl-zoo3 then says so)."""
     import os
 
     import yaml
@@ -304,8 +311,8 @@ def replay_options(argv: list[str]) -> list[str]:
     with open(args_file) as f:
         trained = (yaml.load(f, Loader=yaml.UnsafeLoader) or {}).get("env_kwargs") or {}
     rest, given = dict_options(argv)
-    test = resolve({}, derived_settings(env_id, trained), env_kwargs=trained).eval_env_kwargs
-    options = {**test, **given["--env-kwargs"]}
+    derived = derived_settings(env_id, trained)
+    options = resolve({"env_kwargs": trained}, derived, eval_env_kwargs=given["--env-kwargs"]).eval_env_kwargs
     if not options:
         return argv
     for option in ("--eval-env-kwargs", "--hyperparams"):

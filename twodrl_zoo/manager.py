@@ -106,7 +106,7 @@ class ExperimentManager(ZooExperimentManager):
                     flush=True,
                 )
             return hyperparams, saved
-        hyperparams = {**copy.deepcopy(self.entry), **(self.custom_hyperparams or {})}
+        hyperparams = resolve(copy.deepcopy(self.entry), None, self.custom_hyperparams).entry
         return hyperparams, OrderedDict(sorted(hyperparams.items()))
 
     def create_callbacks(self) -> None:

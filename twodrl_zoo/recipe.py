@@ -3,11 +3,11 @@
 The packaged settings (discount 0.9, 1M steps) were made for the paper's office, 17 moves from start to goal. On a
 larger office the goal's discounted value at the start vanishes (0.9**80 ~ 2e-4). An env that states its task's
 facts (a class method ``task_facts(**options)``, e.g. :func:`twodrl_envs.nomad.task.task_facts`: shortest path
-``L``, farthest start ``D``, whether readings vary, its training and test episode options) gets from
-:func:`derive`:
+``L``, farthest start ``D``, its time limit, whether readings vary) gets from :func:`derive`:
 
-* its own **episode options**: training episodes from random reachable cells (exploring starts), tests from the
-  map's start, with its time limit;
+* its **episode options** (the env's ``starts`` and ``max_episode_steps``): training episodes from random
+  reachable cells (``starts="uniform"``, exploring starts: Sutton & Barto 2018, sec. 5.3), tests from the map's
+  start (``starts="map"``), both with the map's time limit;
 * the **reward discount** ``gamma = max(0.9, 1 - 1/L)``: the goal's reward discounted over the path keeps about
   ``e**-1`` of its value at the start (the punishment discount stays the paper's short one);
 * the **budget** ``n_timesteps = min(max(1e6, 40,000 L), 2e7)`` (rounded up to 1e5), twice that where a cell's
@@ -80,27 +80,27 @@ def derive(facts: dict[str, Any], revision: int = REVISION) -> Derived:
     """
     if revision not in REVISIONS:
         raise ValueError(f"revision must be one of {REVISIONS}, got {revision!r}")
-    for key in ("shortest_path", "farthest_start"):
+    for key in ("shortest_path", "farthest_start", "time_limit"):
         if not isinstance(facts.get(key), int) or facts[key] < 1:
             raise ValueError(f"task facts: {key} must be a positive number of moves, got {facts.get(key)!r}")
-    moves = facts["shortest_path"]
+    moves, limit = facts["shortest_path"], facts["time_limit"]
     budget = min(max(1_000_000, 40_000 * moves), 20_000_000) * (2 if facts.get("varying_readings") else 1)
     hyperparams: dict[str, Any] = {
         "gamma": round(max(0.9, 1.0 - 1.0 / moves), 3),
         "n_timesteps": int(math.ceil(budget / 100_000) * 100_000),
     }
-    env_kwargs = dict(facts.get("train_options", {}))
+    env_kwargs: dict[str, Any] = {"starts": "uniform", "max_episode_steps": limit}
     if moves > LONG_MOVES:
         hyperparams["ent_coef"] = LONG_ENT_COEF
     if facts.get("on_lattice") and (moves > LONG_MOVES or revision >= 2):
         env_kwargs["progress"] = PROGRESS
     varying = revision >= 2 and bool(facts.get("varying_readings"))
     check_episodes = VARYING_CHECK_EPISODES if varying else None
-    eval_env_kwargs = dict(facts.get("test_options", {}))
+    eval_env_kwargs = {"starts": "map", "max_episode_steps": limit}
     note = (
         f"settings derived from the map ({size_class(moves)}: shortest path {moves} moves, farthest start "
         f"{facts['farthest_start']}): gamma {hyperparams['gamma']}, time limit "
-        f"{env_kwargs.get('max_episode_steps', '-')} steps, budget {hyperparams['n_timesteps']:,} steps, training "
+        f"{limit} steps, budget {hyperparams['n_timesteps']:,} steps, training "
         "episodes from random reachable cells (exploring starts)"
     )
     if "ent_coef" in hyperparams:

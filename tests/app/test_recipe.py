@@ -17,8 +17,7 @@ def _facts(moves: int, on_lattice: bool = True, varying: bool = False) -> dict:
         "farthest_start": moves + 5,
         "on_lattice": on_lattice,
         "varying_readings": varying,
-        "train_options": {"starts": "uniform", "max_episode_steps": 300},
-        "test_options": {"starts": "map", "max_episode_steps": 300},
+        "time_limit": 300,
     }
 
 

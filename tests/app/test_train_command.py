@@ -72,6 +72,25 @@ def test_one_precedence_the_written_entry_the_task_the_user() -> None:
     assert resolved.entry["n_envs"] == 64 and resolved.entry["env_kwargs"] == resolved.env_kwargs
     assert resolved.env_kwargs == {"a": 1, **derived.env_kwargs, "map": "generated:L:3", "starts": "map"}
     assert resolved.eval_env_kwargs == {"a": 1, "map": "generated:L:3", **derived.eval_env_kwargs, "b": 2}
+    # env options a --hyperparams gives are the user's too, under --env-kwargs
+    by_hyperparams = resolve(entry, derived, {"env_kwargs": {"c": 3, "starts": "map"}}, {"starts": "uniform"})
+    assert by_hyperparams.env_kwargs == {"a": 1, **derived.env_kwargs, "c": 3, "starts": "uniform"}
+
+
+def test_the_env_states_facts_the_recipe_decides_the_episodes() -> None:
+    """The env's task facts hold no episode options; the recipe gives training exploring starts and tests the map's
+    start, both with the map's time limit."""
+    from twodrl_zoo.hyperparams import task_facts
+    from twodrl_zoo.recipe import derive
+
+    facts = task_facts("NomadOffice-v0", {"map": "generated:M:3"})
+    assert facts is not None and not any(isinstance(value, dict) for value in facts.values())
+    assert facts["time_limit"] == max(300, 3 * facts["farthest_start"])
+    derived = derive(facts)
+    assert derived.env_kwargs["starts"] == "uniform" and derived.eval_env_kwargs["starts"] == "map"
+    assert (
+        derived.env_kwargs["max_episode_steps"] == derived.eval_env_kwargs["max_episode_steps"] == facts["time_limit"]
+    )
 
 
 def test_export_help_is_plain_text(capsys: pytest.CaptureFixture[str]) -> None:

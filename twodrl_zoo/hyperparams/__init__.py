@@ -200,16 +200,17 @@ def resolve(
 ) -> Resolved:
     """The one precedence of run settings: the written ``entry`` (packaged, rl-zoo3's or the user's file) < the
     settings ``derived`` from the env's task < what the user passes (``hyperparams``, ``env_kwargs``,
-    ``eval_env_kwargs``). Used by the train command, :func:`load` and both bench protocols.
+    ``eval_env_kwargs``). Used by the train and enjoy commands, :func:`load`, the manager and both bench protocols.
 
-    Training envs get the entry's ``env_kwargs`` < the derived training options < ``env_kwargs``; test envs the
-    entry's ``env_kwargs`` < ``env_kwargs`` < the derived test options (the map's start, the time limit) <
-    ``eval_env_kwargs``.
+    Training envs get the entry's ``env_kwargs`` < the derived training options < ``env_kwargs`` (the user's:
+    those of ``hyperparams`` < ``env_kwargs``); test envs the entry's ``env_kwargs`` < the user's < the derived test
+    options (the map's start, the time limit) < ``eval_env_kwargs``.
     """
     derived = derived or Derived()
+    hyperparams = dict(hyperparams or {})
     written = dict(entry.get("env_kwargs") or {})
-    given = dict(env_kwargs or {})
-    merged = {**entry, **derived.hyperparams, **(hyperparams or {})}
+    given = {**(hyperparams.pop("env_kwargs", None) or {}), **(env_kwargs or {})}
+    merged = {**entry, **derived.hyperparams, **hyperparams}
     train = {**written, **derived.env_kwargs, **given}
     test = {**written, **given, **derived.eval_env_kwargs, **(eval_env_kwargs or {})}
     if train:

@@ -34,7 +34,7 @@ class StandInRobot:
     """One episode at a time of ``env_id`` (any Nomad ID) on ``map``, from the map's start, seeded ``seed``.
 
     ``options`` go to ``gym.make`` (e.g. ``model=`` of ``NomadOfficeReal-v0``); the odometry is always observed.
-    The episode's time limit is the map's test time limit (:attr:`time_limit`: the env's task facts, e.g. 480 steps
+    The episode's time limit is the map's (:attr:`time_limit`: the env's task facts, e.g. 480 steps
     on an office whose farthest start is 160 moves; the registered 300 on the paper's maps) unless ``options``
     give ``max_episode_steps``. A move after the goal, a collision or the time limit is a ``RuntimeError``
     (:meth:`ended` says when); :meth:`reset` starts again.
@@ -52,7 +52,7 @@ class StandInRobot:
         if "max_episode_steps" not in options:
             facts = self._task_facts(env_id, options)
             if facts is not None:
-                options["max_episode_steps"] = facts["test_options"]["max_episode_steps"]
+                options["max_episode_steps"] = facts["time_limit"]
         self.env = gym.make(env_id, disable_env_checker=True, **options)
         self.time_limit: int = self.env.spec.max_episode_steps  # type: ignore[union-attr,assignment]
         """The most moves of an episode (the test time limit); a move past it is refused."""

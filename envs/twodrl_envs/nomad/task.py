@@ -9,12 +9,11 @@ start, a 300-step time limit) are its task. On another map (a user's own, a gene
 * ``varying_readings``: whether a cell's readings vary from visit to visit (sensor noise, a recorded database,
   the stand-in robot: :attr:`~twodrl_envs.nomad.core.Robot.varying_readings`); ``on_lattice``: whether the
   robot moves on the lattice (then the ``progress`` option exists);
-* its **episode options**: for training, episodes from a cell drawn among those reachable from the start
-  (``starts="uniform"``, exploring starts: Sutton & Barto 2018, sec. 5.3) and the time limit
-  ``max(300, 3 farthest_start)``; for tests, episodes from the map's start with the same limit.
+* ``time_limit``: the map's episode time limit, ``max(300, 3 farthest_start)`` (the paper's 300 on its maps): the
+  env's own, as a Gymnasium spec's ``max_episode_steps`` is.
 
-The rule that turns these facts into a discount, a budget and an entropy bonus is the trainer's
-(``twodrl_zoo.recipe``).
+What to do with them is the trainer's (``twodrl_zoo.recipe``): where episodes start (the env's ``starts`` option,
+e.g. exploring starts for training), the discount, the budget, the entropy bonus.
 """
 
 from __future__ import annotations
@@ -53,13 +52,11 @@ def task_facts(robot: Robot) -> dict[str, Any] | None:
         raise ValueError(f"map {office.source}: this robot cannot reach the goal from the start (its moves)")
     moves = int(distance[robot.core.start_cell])
     farthest = int(distance[robot.start_cells].max()) if len(robot.start_cells) else moves
-    limit = max(MIN_TIME_LIMIT, 3 * farthest)
     return {
         "map": office.source,
         "shortest_path": moves,
         "farthest_start": farthest,
+        "time_limit": max(MIN_TIME_LIMIT, 3 * farthest),
         "varying_readings": bool(robot.varying_readings),
         "on_lattice": bool(robot.on_lattice),
-        "train_options": {"starts": "uniform", "max_episode_steps": limit},
-        "test_options": {"starts": "map", "max_episode_steps": limit},
     }
