@@ -113,3 +113,17 @@ def test_the_docs_robot_loop_reaches_the_goal_on_the_stand_in_robot(tmp_path: Pa
 def test_bad_arguments_are_errors_naming_them(call, error: type, match: str) -> None:
     with pytest.raises(error, match=match):
         call()
+
+
+def test_the_robot_s_time_limit_is_its_map_s_not_the_paper_s_300() -> None:
+    """The docs' loop reads ``robot.time_limit``: on a large office it is the map's (3 times the farthest start),
+    and the robot refuses a move past it."""
+    robot = StandInRobot("NomadOfficeReal-v0", map="generated:L:2", seed=0)
+    farthest = robot._task_facts("NomadOfficeReal-v0", {"map": "generated:L:2"})["farthest_start"]
+    assert robot.time_limit == 3 * farthest > gym.registry["NomadOfficeReal-v0"].max_episode_steps == 300
+    for step in range(robot.time_limit):  # south, north: shuttles in place, no collision on this map at seed 0
+        assert not robot.ended(), step
+        robot.move_10cm(0 if step % 2 else 2)
+    assert robot.ended() and not robot.at_goal()
+    with pytest.raises(RuntimeError):
+        robot.move_10cm(0)
