@@ -89,3 +89,25 @@ def test_with_uuid_the_report_is_of_the_run_trained(
     model = Path(line.split()[1])
     assert model.is_file() and re.fullmatch(r"NomadOffice-v0_1_[0-9a-f-]+", model.parent.name)
     assert re.search(r"^sb3-twodrl-train: goal rate \d\.\d\d \(\d+ of 20", out, re.MULTILINE)
+
+
+def test_a_check_s_episodes_run_side_by_side_with_the_checks_of_one_env_at_a_time(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """On a batched env a check's episodes run in as many envs (one policy call per step for all); on the exact
+    readings of the simulator they are the episodes one env at a time runs (rl-zoo3's ``--n-eval-envs 1``)."""
+    import twodrl_zoo.manager
+
+    monkeypatch.chdir(tmp_path)
+    records = []
+    for side_by_side in (True, False):
+        if not side_by_side:  # the rule off: rl-zoo3's one eval env
+            monkeypatch.setattr(twodrl_zoo.manager, "ZOO_EVAL_ENVS", -1)
+        folder = tmp_path / str(len(records))
+        argv = ["--algo", "twoda2c", "--env", "NomadOffice-v0", "--env-kwargs", "map:'generated:S:3'", "-n", "12800"]
+        train([*argv, "-f", str(folder / "logs"), "--eval-freq", "3200", "--seed", "1"])
+        (path,) = folder.glob(f"logs/twoda2c/*/{CHECKS_FILE}")
+        records.append(json.loads(path.read_text()))
+    assert [record["check_envs"] for record in records] == [5, 1]
+    assert len(records[0]["checks"]) == 4 and records[0]["checks"] == records[1]["checks"]
+    capsys.readouterr()
