@@ -4,7 +4,8 @@ Both register ``twoda2c`` and ``twodppo`` (:func:`twodrl_zoo.zoo.register_zoo`) 
 that list themselves under the ``sb3_twodrl.gym_packages`` entry points (:func:`twodrl_zoo.zoo.import_gym_packages`),
 so their env IDs work from any folder without ``--gym-packages``; every rl-zoo3 option is kept, and
 ``--num-threads`` defaults to 1 (rl-zoo3's default keeps torch's thread count: several times slower for these small
-networks on a shared machine, docs/zoo.md).
+networks on a shared machine, docs/zoo.md); ``sb3-twodrl-train``'s ``--n-eval-envs`` defaults to
+:data:`twodrl_zoo.manager.SIDE_BY_SIDE` (a goal check's episodes side by side on a batched env).
 ``sb3-twodrl-train`` reads the packaged ``<algo>.yml`` (:mod:`twodrl_zoo.hyperparams`) for a2c, ppo, twoda2c and
 twodppo unless ``-conf/--conf-file`` names another file. A command whose extra is missing exits, before any work,
 with the ``pip install`` line that adds it (:func:`require_extra`). ``sb3-twodrl-enjoy`` without ``pygame`` (the
@@ -62,13 +63,15 @@ def train(argv: list[str] | None = None) -> None:
     require_extra("zoo", *ZOO_MODULES)
     import rl_zoo3.train
 
-    from twodrl_zoo.manager import ExperimentManager
+    from twodrl_zoo.manager import SIDE_BY_SIDE, ExperimentManager
     from twodrl_zoo.zoo import has_option, prepare_zoo_argv, run_zoo_entry
 
     argv = prepare_zoo_argv(sys.argv[1:] if argv is None else argv, packaged_conf=True)
     options = check_command_line("sb3-twodrl-train", argv)
     if not has_option(argv, "--num-threads"):
         argv += ["--num-threads", "1"]
+    if not has_option(argv, "--n-eval-envs"):
+        argv += ["--n-eval-envs", str(SIDE_BY_SIDE)]
     zoo_manager = rl_zoo3.train.ExperimentManager
     rl_zoo3.train.ExperimentManager = ExperimentManager  # type: ignore[misc]
     try:

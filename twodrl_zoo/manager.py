@@ -12,8 +12,9 @@ What it changes of rl-zoo3's (everything else, every option, the run folder, is 
   their own;
 - **goal checks**: the evaluation is :class:`sb3_twodrl.callbacks.GoalCheckCallback`, which keeps the policy with
   the best goal rate and stops once :data:`PATIENCE` checks in a row reach :data:`SUCCESS_THRESHOLD` (each check
-  ``--eval-episodes`` episodes, or the task's own number where readings vary, on a batched env as many episodes
-  side by side, one policy call per step for all of them, unless the user gives ``--n-eval-envs``); the model
+  ``--eval-episodes`` episodes, or the task's own number where readings vary; with ``n_eval_envs``
+  :data:`SIDE_BY_SIDE`, the train command's default, they run side by side on a batched env, one policy call per
+  step for all of them); the model
   saved as ``<env>.zip`` is the kept one, and ``goal_checks.json`` in the run folder says which check it was,
   whether any check passed, what every check gave and how long training took; :data:`SAVED` lists the run
   folders this process saved (the train command reports on its own run, not on a folder guessed from argv);
@@ -49,7 +50,7 @@ from sb3_twodrl.callbacks import PATIENCE, SUCCESS_THRESHOLD, GoalCheckCallback
 from twodrl_zoo.hyperparams import derived_settings, resolve
 from twodrl_zoo.vec_env import has_batched_env, make_train_env
 
-__all__ = ["CEILING", "CHECKS_FILE", "PATIENCE", "SAVED", "SUCCESS_THRESHOLD", "ExperimentManager"]
+__all__ = ["CEILING", "CHECKS_FILE", "PATIENCE", "SAVED", "SIDE_BY_SIDE", "SUCCESS_THRESHOLD", "ExperimentManager"]
 
 CEILING = 2
 """The budget's factor when goal checks stop training once learned: the early stop ends most runs well before, so
@@ -61,10 +62,11 @@ CHECKS_FILE = "goal_checks.json"
 ZOO_EVAL_EPISODES = 5
 """rl-zoo3's ``--eval-episodes`` default: a task's own check episodes (:mod:`twodrl_zoo.recipe`) replace it only,
 so a user's other value wins."""
-ZOO_EVAL_ENVS = 1
-"""rl-zoo3's ``--n-eval-envs`` default: on a batched env the checks' episodes run side by side instead (a check is
-then one batched rollout: on the simulator's exact readings the same episodes, in about a fifth of the policy
-calls), so a user's other value wins."""
+SIDE_BY_SIDE = 0
+"""``n_eval_envs`` meaning "a goal check's episodes side by side": as many eval envs as the check's episodes on a
+batched env (a check is then one batched rollout: on the simulator's exact readings the same episodes as one env at
+a time, with a fifth of the policy calls), else one. ``sb3-twodrl-train`` passes it unless the user gives
+``--n-eval-envs``."""
 SAVED: list[str] = []
 """The run folders (rl-zoo3's ``save_path``) this process saved a model to, the latest last."""
 
@@ -93,8 +95,8 @@ class ExperimentManager(ZooExperimentManager):
                 given["n_eval_episodes"] = derived.check_episodes
             self.readings_vary = derived.check_episodes is not None
             print(f"sb3-twodrl: {derived.note}", flush=True)
-        if stops and entry is None and given["n_eval_envs"] == ZOO_EVAL_ENVS and has_batched_env(given["env_id"]):
-            given["n_eval_envs"] = given["n_eval_episodes"]
+        if given["n_eval_envs"] == SIDE_BY_SIDE:
+            given["n_eval_envs"] = given["n_eval_episodes"] if has_batched_env(given["env_id"]) else 1
         super().__init__(**given)
         self.entry, self.batched = entry, batched
         self.goal_checks: GoalCheckCallback | None = None

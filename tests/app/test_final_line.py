@@ -95,17 +95,13 @@ def test_a_check_s_episodes_run_side_by_side_with_the_checks_of_one_env_at_a_tim
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """On a batched env a check's episodes run in as many envs (one policy call per step for all); on the exact
-    readings of the simulator they are the episodes one env at a time runs (rl-zoo3's ``--n-eval-envs 1``)."""
-    import twodrl_zoo.manager
-
+    readings of the simulator they are the episodes one env at a time runs (``--n-eval-envs 1``, rl-zoo3's)."""
     monkeypatch.chdir(tmp_path)
     records = []
-    for side_by_side in (True, False):
-        if not side_by_side:  # the rule off: rl-zoo3's one eval env
-            monkeypatch.setattr(twodrl_zoo.manager, "ZOO_EVAL_ENVS", -1)
+    for more in ((), ("--n-eval-envs", "1")):
         folder = tmp_path / str(len(records))
         argv = ["--algo", "twoda2c", "--env", "NomadOffice-v0", "--env-kwargs", "map:'generated:S:3'", "-n", "12800"]
-        train([*argv, "-f", str(folder / "logs"), "--eval-freq", "3200", "--seed", "1"])
+        train([*argv, "-f", str(folder / "logs"), "--eval-freq", "3200", "--seed", "1", *more])
         (path,) = folder.glob(f"logs/twoda2c/*/{CHECKS_FILE}")
         records.append(json.loads(path.read_text()))
     assert [record["check_envs"] for record in records] == [5, 1]
