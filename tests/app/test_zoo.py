@@ -260,17 +260,17 @@ def test_installed_commands_point_at_the_cli() -> None:
     [
         (
             ["--algo", "twoda2c", "--env", "NomadOffice-v0"],
-            ["--conf-file", str(hyperparams_path("twoda2c")), "--num-threads", "1"],
+            ["--conf-file", str(hyperparams_path("twoda2c")), "--num-threads", "1", "--n-eval-envs", "0"],
         ),
         (
-            ["--algo", "twoda2c", "--env", "NomadOffice-v0", "--num-threads", "2"],
+            ["--algo", "twoda2c", "--env", "NomadOffice-v0", "--num-threads", "2", "--n-eval-envs", "1"],
             ["--conf-file", str(hyperparams_path("twoda2c"))],
         ),
-        (["--algo", "a2c", "--env", "CartPole-v1", "-conf", "mine.yml"], ["--num-threads", "1"]),
-        (["--algo", "dqn", "--env", "CartPole-v1"], ["--num-threads", "1"]),  # not packaged: rl-zoo3's own file
+        (["--algo", "a2c", "--env", "CartPole-v1", "-conf", "mine.yml"], ["--num-threads", "1", "--n-eval-envs", "0"]),
+        (["--algo", "dqn", "--env", "CartPole-v1"], ["--num-threads", "1", "--n-eval-envs", "0"]),  # rl-zoo3's file
     ],
 )
-def test_train_defaults_to_the_packaged_file_and_one_thread(argv, added, monkeypatch):
+def test_train_defaults_to_the_packaged_file_one_thread_and_checks_side_by_side(argv, added, monkeypatch):
     import twodrl_zoo.zoo
 
     seen: list[list[str]] = []
