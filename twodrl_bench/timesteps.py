@@ -42,7 +42,7 @@ Keys this job reads, beside the fields every spec has:
 - ``arms.<name>.settings``: ``packaged`` (default), ``rl-zoo3`` or a folder
   (:func:`twodrl_bench.settings.settings_file`); ``arms.<name>.override``: settings over the entry.
 
-Resolving a spec's timesteps arm is :func:`resolve_arm`; :func:`run_job` runs a job given as plain data.
+Resolving a spec's timesteps arm is :func:`resolve_arm`; :func:`run_plain_job` runs a job given as plain data.
 
 Requires the ``zoo`` extra.
 """
@@ -66,7 +66,6 @@ from twodrl_bench import jobs
 from twodrl_bench.experiment import Arm, Experiment, Job, with_seed
 from twodrl_bench.protocol import TimestepsProtocol
 from twodrl_bench.settings import STUDY_REVISION, check_entry, timesteps_entry
-from twodrl_bench.settings import settings_file as settings_file_of
 from twodrl_bench.stand_ins import stand_in_columns, stand_in_trials
 from twodrl_bench.timestep_callbacks import Checkpoints, GoalChecks, restore_monitors
 from twodrl_bench.timestep_measures import (
@@ -90,14 +89,6 @@ def check_protocol(protocol: dict[str, Any]) -> TimestepsProtocol:
     :raises ValueError: naming the key, for an unknown key or a bad budget, episode count or label
     """
     return TimestepsProtocol.from_mapping(protocol)
-
-
-def settings_file(arm: dict[str, Any]) -> Path:
-    """The rl-zoo3 hyperparameter file ``arm`` reads (:func:`twodrl_bench.settings.settings_file`).
-
-    :raises ValueError: if the file does not exist
-    """
-    return settings_file_of(arm["algo"], arm.get("settings", "packaged"))
 
 
 def resolve_arm(arm: dict[str, Any], env: str, protocol: dict[str, Any]) -> dict[str, Any]:
@@ -241,7 +232,7 @@ def run(job: Job) -> list[Row]:
     ]
 
 
-def run_job(
+def run_plain_job(
     arm: dict[str, Any],
     env: str,
     env_kwargs: dict[str, Any],

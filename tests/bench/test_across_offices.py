@@ -84,7 +84,7 @@ def test_a_timesteps_job_on_a_generated_office_trains_as_the_train_command(tmp_p
     """The map's derived settings apply (exploring starts, discount, time limit), the checks and the final
     evaluation start at the map's start, and the transfer trials run the stand-in robot in the job's map."""
     pytest.importorskip("rl_zoo3")
-    from twodrl_bench.timesteps import resolve_arm, run_job
+    from twodrl_bench.timesteps import resolve_arm, run_plain_job
     from twodrl_zoo.hyperparams import derived_settings
 
     protocol = {
@@ -101,7 +101,7 @@ def test_a_timesteps_job_on_a_generated_office_trains_as_the_train_command(tmp_p
         "hyperparams": resolve_arm({"algo": "twoda2c"}, "NomadOffice-v0", protocol),
     }
     kwargs = {"map": "generated:S:{seed}"}
-    (row,) = run_job(arm, "NomadOffice-v0", kwargs, protocol, 5, str(tmp_path), ["twodrl_envs"])
+    (row,) = run_plain_job(arm, "NomadOffice-v0", kwargs, protocol, 5, str(tmp_path), ["twodrl_envs"])
     settings = derived_settings("NomadOffice-v0", {"map": "generated:S:5"})
     assert settings is not None
     (config,) = (tmp_path / "zoo" / "twoda2c_seed5").glob("twoda2c/*/NomadOffice-v0/config.yml")

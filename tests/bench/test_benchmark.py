@@ -21,7 +21,7 @@ pytest.importorskip("scipy")
 import twodrl_envs  # noqa: F401  (registers the IDs)
 from sb3_twodrl.common.splitting import split_info
 from twodrl_bench.reports.benchmark import report, verdict
-from twodrl_bench.timesteps import resolve_arm, run_job
+from twodrl_bench.timesteps import resolve_arm, run_plain_job
 
 TASKS = ("CliffWalking", "LunarLander", "LavaGap", "CartPole", "Acrobot", "Pendulum")
 RESULTS = Path(__file__).parents[2] / "results" / "benchmark"
@@ -122,7 +122,7 @@ def test_smoke_each_task_spec_trains_and_evaluates_its_arms(tmp_path, task: str,
         protocol = {**spec["protocol"], "timesteps": 512, "eval_episodes": 1}
         job_arm = {"name": arm, "algo": spec["arms"][arm]["algo"]}
         job_arm["hyperparams"] = resolve_arm(spec["arms"][arm], spec["env"], protocol)
-        (row,) = run_job(job_arm, spec["env"], {}, protocol, 0, str(tmp_path), ["twodrl_envs"])
+        (row,) = run_plain_job(job_arm, spec["env"], {}, protocol, 0, str(tmp_path), ["twodrl_envs"])
         assert row["arm"] == arm and row["task"] == task and row["n_timesteps"] == 512
         assert math.isfinite(row["final_return"]) and row["final_events"] >= 0 and row["train_episodes"] >= 0
         assert len(json.loads(row["curve"])) == 20

@@ -17,7 +17,7 @@ pytest.importorskip("scipy")
 
 from sb3_twodrl import TwoDimA2C
 from twodrl_bench.reports.non_regression import report
-from twodrl_bench.timesteps import resolve_arm, run_job
+from twodrl_bench.timesteps import resolve_arm, run_plain_job
 from twodrl_zoo.hyperparams import hyperparams_path, read_entry
 
 ENVS = ("CartPole-v1", "Acrobot-v1", "Pendulum-v1")
@@ -44,7 +44,7 @@ def test_tiny_pendulum_run_evaluates_with_frozen_statistics_and_applies_override
         {**spec["arms"]["twoda2c"], "override": {"min_temperature": 1.0}}, "Pendulum-v1", protocol
     )
     arm = {"name": "twoda2c", "algo": "twoda2c", "hyperparams": hyperparams}
-    (row,) = run_job(arm, "Pendulum-v1", {}, protocol, 0, str(tmp_path), spec["gym_packages"])
+    (row,) = run_plain_job(arm, "Pendulum-v1", {}, protocol, 0, str(tmp_path), spec["gym_packages"])
     assert row["arm"] == "twoda2c" and row["task"] == "Pendulum-v1" and math.isfinite(row["final_return"])
     run = tmp_path / "zoo" / "twoda2c_seed0" / "twoda2c" / "Pendulum-v1_1"
     assert (run / "Pendulum-v1" / "vecnormalize.pkl").exists()  # the entry normalises: stats saved and used

@@ -17,8 +17,9 @@ from tests.helpers.recording_cpu import RECORDING_KERNELS, WHY
 
 pytest.importorskip("rl_zoo3")
 
+from twodrl_bench.settings import settings_file
 from twodrl_bench.timestep_measures import learning_curve, training_episodes
-from twodrl_bench.timesteps import check_protocol, resolve_arm, run_job, settings_file
+from twodrl_bench.timesteps import check_protocol, resolve_arm, run_plain_job
 
 OLD_ROWS = Path(__file__).parents[1] / "data" / "timesteps_old_rows.json"
 TASKS = ("CliffWalking", "LunarLander", "LavaGap", "CartPole", "Acrobot", "Pendulum")
@@ -38,7 +39,9 @@ def _job(spec: dict[str, Any], arm: str, seed: int, out: Path, **protocol: Any) 
     protocol = {**spec["protocol"], **protocol}
     hyperparams = resolve_arm(spec["arms"][arm], spec["env"], protocol)
     job_arm = {"name": arm, "algo": spec["arms"][arm]["algo"], "hyperparams": hyperparams}
-    (row,) = run_job(job_arm, spec["env"], spec.get("env_kwargs") or {}, protocol, seed, str(out), spec["gym_packages"])
+    (row,) = run_plain_job(
+        job_arm, spec["env"], spec.get("env_kwargs") or {}, protocol, seed, str(out), spec["gym_packages"]
+    )
     return row
 
 
@@ -117,9 +120,11 @@ def test_spec_entries_are_the_settings_the_committed_rows_ran_with(task: str) ->
 
 def test_settings_sources_and_a_rescaled_info_split() -> None:
     lava = load_spec("benchmark/LavaGap")
-    assert settings_file(lava["arms"]["twodppo"]).parent.parent.name == "rl_zoo3"  # the stock algo's file
-    assert settings_file(lava["arms"]["twodppo"]).name == "ppo.yml"
-    assert settings_file({"algo": "twoda2c"}).parent.name == "hyperparams"  # packaged
+    assert (
+        settings_file("twodppo", lava["arms"]["twodppo"].get("settings", "packaged")).parent.parent.name == "rl_zoo3"
+    )  # the stock algo's file
+    assert settings_file("twodppo", lava["arms"]["twodppo"].get("settings", "packaged")).name == "ppo.yml"
+    assert settings_file("twoda2c").parent.name == "hyperparams"  # packaged
     rescaled = {"algo": "twodppo", "settings": "rl-zoo3", "override": {"reward_split": "info"}}
     with pytest.raises(ValueError, match="normalises rewards"):
         resolve_arm(rescaled, lava["env"], lava["protocol"])
@@ -162,14 +167,18 @@ def test_bad_job_input_is_refused_before_training(tmp_path) -> None:
     protocol = {"timesteps": 64, "eval_episodes": 1}
     entry = resolve_arm({"algo": "a2c"}, "CartPole-v1", protocol)
     with pytest.raises(ValueError, match="seed must be an int >= 0, got -1"):
-        run_job({"name": "a", "algo": "a2c", "hyperparams": entry}, "CartPole-v1", {}, protocol, -1, str(tmp_path), [])
+        run_plain_job(
+            {"name": "a", "algo": "a2c", "hyperparams": entry}, "CartPole-v1", {}, protocol, -1, str(tmp_path), []
+        )
     with pytest.raises(ValueError, match=r"algo must be one of \[.*\], got 'nope'"):
-        run_job({"name": "a", "algo": "nope", "hyperparams": entry}, "CartPole-v1", {}, protocol, 0, str(tmp_path), [])
+        run_plain_job(
+            {"name": "a", "algo": "nope", "hyperparams": entry}, "CartPole-v1", {}, protocol, 0, str(tmp_path), []
+        )
     with pytest.raises(ValueError, match=r"arm must be \{name, algo, hyperparams\}"):
-        run_job({"algo": "a2c", "override": {}}, "CartPole-v1", {}, protocol, 0, str(tmp_path), [])
+        run_plain_job({"algo": "a2c", "override": {}}, "CartPole-v1", {}, protocol, 0, str(tmp_path), [])
     unresolved = {"name": "a", "algo": "a2c", "hyperparams": entry}  # resolved without the protocol's events
     with pytest.raises(ValueError, match="monitor_kwargs must record 'cliff_falls'"):
-        run_job(unresolved, "CartPole-v1", {}, {**protocol, "events": "cliff_falls"}, 0, str(tmp_path), [])
+        run_plain_job(unresolved, "CartPole-v1", {}, {**protocol, "events": "cliff_falls"}, 0, str(tmp_path), [])
     assert not (tmp_path / "zoo").exists()
 
 
@@ -194,7 +203,7 @@ def test_keep_learned_stops_once_learned_and_evaluates_the_kept_policy(tmp_path)
     protocol["keep_learned"] = True
     arm = {"name": "twoda2c", "algo": "twoda2c"}
     arm["hyperparams"] = resolve_arm(arm, "NomadOffice-v0", protocol)
-    (row,) = run_job(arm, "NomadOffice-v0", {"map": "generated:S:3"}, protocol, 0, str(tmp_path), ["twodrl_envs"])
+    (row,) = run_plain_job(arm, "NomadOffice-v0", {"map": "generated:S:3"}, protocol, 0, str(tmp_path), ["twodrl_envs"])
     checks = json.loads(row["checks"])
     assert row["learned_at"] == checks[-1][0] < 2_000_000 and checks[-1][1] == checks[-2][1] == 1.0
     assert row["steps"] == row["learned_at"] + 64  # the stop comes at the first step after the rollout's check
