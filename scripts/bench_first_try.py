@@ -325,7 +325,7 @@ def table(rows: list[dict[str, str]]) -> str:
                 cells += [count(group, "real_goal_rate"), count(group, "sim_goal_rate")]
                 cells += [median_max(group, f) for f in ("survey_s", "import_s", "train_s")]
             lines.append(f"| {size} | {algo} | " + " | ".join(cells) + " |")
-    commits = {c: sum(r["commit"] == c for r in rows) for c in dict.fromkeys(r["commit"] for r in rows)}
+    commits = Counter(r["commit"] for r in rows)
     if len(commits) > 1:
         lines += ["", "Rows by the commit that ran them: " + ", ".join(f"`{c}` {n}" for c, n in commits.items()) + "."]
     head = "| map | moves | algo | seed | goal rate | kept at | steps | budget | wall s |"

@@ -19,7 +19,10 @@ import importlib
 import importlib.util
 import runpy
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from twodrl_zoo.hyperparams import Resolved
 
 __all__ = [
     "RENDER_MODULE",
@@ -27,6 +30,7 @@ __all__ = [
     "check_command_line",
     "enjoy",
     "export_line",
+    "given_options",
     "has_screen",
     "replay_options",
     "report_goal_rate",
@@ -88,7 +92,6 @@ def check_command_line(prog: str, argv: list[str]) -> dict[str, dict[str, Any]]:
     one line naming what is wrong."""
     import gymnasium as gym
 
-    from twodrl_zoo.hyperparams import resolve
     from twodrl_zoo.zoo import dict_options, option_value
 
     try:
@@ -106,7 +109,7 @@ def check_command_line(prog: str, argv: list[str]) -> dict[str, dict[str, Any]]:
         close = difflib.get_close_matches(env_id, list(gym.registry), n=1)
         sys.exit(f"{prog}: env {env_id!r} is not registered" + (f"; did you mean {close[0]!r}?" if close else ""))
     if env_id is not None:
-        resolved = resolve({}, None, env_kwargs=given["--env-kwargs"], eval_env_kwargs=given["--eval-env-kwargs"])
+        resolved = given_options(given)
         for option, options in (("--env-kwargs", resolved.env_kwargs), ("--eval-env-kwargs", resolved.eval_env_kwargs)):
             if option == "--eval-env-kwargs" and not given[option]:
                 continue  # the env of --env-kwargs, made just above
@@ -115,6 +118,15 @@ def check_command_line(prog: str, argv: list[str]) -> dict[str, dict[str, Any]]:
             except (ValueError, TypeError, FileNotFoundError) as error:
                 sys.exit(f"{prog}: {env_id} with {option} {given[option]}: {error}")
     return given
+
+
+def given_options(given: dict[str, dict[str, Any]]) -> Resolved:
+    """The command line's env options (``given``, :func:`check_command_line`) in the one precedence
+    (:func:`twodrl_zoo.hyperparams.resolve`): ``--env-kwargs`` for training, ``--eval-env-kwargs`` over them for
+    tests."""
+    from twodrl_zoo.hyperparams import resolve
+
+    return resolve({}, None, env_kwargs=given["--env-kwargs"], eval_env_kwargs=given["--eval-env-kwargs"])
 
 
 def report_goal_rate(argv: list[str], given: dict[str, dict[str, Any]], episodes: int = 20) -> float | None:
@@ -134,7 +146,6 @@ def report_goal_rate(argv: list[str], given: dict[str, dict[str, Any]], episodes
     from rl_zoo3.utils import ALGOS, create_test_env, get_saved_hyperparams
 
     from twodrl_zoo.evaluation import goal_rate, run_episodes
-    from twodrl_zoo.hyperparams import resolve
     from twodrl_zoo.manager import CHECKS_FILE, SAVED
     from twodrl_zoo.zoo import option_value
 
@@ -156,10 +167,7 @@ def report_goal_rate(argv: list[str], given: dict[str, dict[str, Any]], episodes
         log_dir=None,
         should_render=False,
         hyperparams=hyperparams,
-        env_kwargs=record["test_env_kwargs"]
-        or resolve(
-            {}, None, env_kwargs=given["--env-kwargs"], eval_env_kwargs=given["--eval-env-kwargs"]
-        ).eval_env_kwargs,
+        env_kwargs=record["test_env_kwargs"] or given_options(given).eval_env_kwargs,
     )
     model = ALGOS[algo].load(model_path, device="cpu")
     rate = goal_rate(run_episodes(model, env, per_env=episodes))
