@@ -1,15 +1,20 @@
 """NomadOfficeMemorable-v0: replay env semantics, ideal K=1 equivalence, determinism, batched."""
 
+from collections import Counter
+
 import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
+from hypothesis import given
+from hypothesis import strategies as st
 
 from tests.envs.test_nomad_batched import assert_batched_equals_singles
 from twodrl_envs import MAX_EPISODE_STEPS
 from twodrl_envs.memorable.database import SensorDatabase
-from twodrl_envs.memorable.env import BatchedNomadOfficeMemorable, NomadOfficeMemorableEnv
+from twodrl_envs.memorable.env import HOLD_OUT, BatchedNomadOfficeMemorable, NomadOfficeMemorableEnv, split_readings
 from twodrl_envs.memorable.recording import record_database
+from twodrl_envs.nomad import sensors
 from twodrl_envs.nomad.core import office_core
 from twodrl_zoo.vec_env import make_train_env
 
@@ -117,3 +122,51 @@ def test_sb3_vec_env():
     assert obs.shape == (3, 34)
     obs, _, _, infos = venv.step(np.array([0, 1, 2]))
     assert obs.shape == (3, 34) and len(infos) == 3 and "route" in infos[0]
+
+
+@given(st.lists(st.integers(0, 12), min_size=1, max_size=30))
+def test_held_out_recordings_are_the_last_quarter_of_each_cell_and_fit_the_rest(counts: list[int]) -> None:
+    counts_ = np.array(counts)
+    fit, held = split_readings(counts_, "fit"), split_readings(counts_, "held_out")
+    assert split_readings(counts_, "all").all() and len(fit) == len(held) == sum(counts)
+    cell = np.repeat(np.arange(len(counts)), counts)
+    for c, n in enumerate(counts):
+        f, h = fit[cell == c], held[cell == c]
+        if n == 1:  # one recording cannot be split: both replay it
+            assert f.all() and h.all()
+        elif n >= 2:
+            assert h.sum() == -(-n // HOLD_OUT) and (f ^ h).all() and h[-1] and f[0]
+
+
+def test_a_robot_trained_on_fit_recordings_never_reads_a_held_out_one():
+    db = record_database(8, map="generated:S:3", seed=0)
+    fit, held = (
+        NomadOfficeMemorableEnv(map="generated:S:3", database=db, readings=r).robot for r in ("fit", "held_out")
+    )
+
+    def rows(robot, cell):
+        start = int(robot.offsets[cell])
+        return Counter(tuple(r) for r in robot.readings[start : start + int(robot.counts[cell])])
+
+    cells = np.flatnonzero(db.counts >= 2)
+    keys = np.arange(len(cells), dtype=np.uint64) * np.uint64(7919)
+    drawn = [fit.cell_readings(cells, keys, np.full(len(cells), step)) for step in range(20)]
+    for i, cell in enumerate(cells):
+        recorded = Counter(tuple(r) for r in sensors.normalise(db.cell_readings(cell)))
+        assert rows(fit, cell) + rows(held, cell) == recorded  # a split: every recording in exactly one
+        assert {tuple(d[i]) for d in drawn} <= set(rows(fit, cell))
+    with pytest.raises(ValueError, match=r"readings must be one of .* got 'train'"):
+        NomadOfficeMemorableEnv(map="generated:S:3", database=db, readings="train")
+
+
+@pytest.mark.parametrize("readings", ["fit", "held_out"])
+def test_split_and_noisy_replays_batched_equal_singles(readings):
+    db = record_database(4, seed=0)  # the paper's office: info has routes
+    options = {"database": db, "readings": readings, "sensor_noise": True, "max_episode_steps": 60}
+    batched = BatchedNomadOfficeMemorable(3, **options)
+    singles = [NomadOfficeMemorableEnv(**options) for _ in range(3)]
+    actions = np.random.default_rng(0).integers(0, 4, size=(200, 3))
+    assert assert_batched_equals_singles(batched, singles, 11, actions) > 0
+    plain = NomadOfficeMemorableEnv(database=db, readings=readings)
+    noisy = NomadOfficeMemorableEnv(**options)
+    assert not np.array_equal(plain.reset(seed=1)[0], noisy.reset(seed=1)[0])  # the noise is on

@@ -18,10 +18,42 @@ from twodrl_envs.memorable.database import SensorDatabase, load_database
 from twodrl_envs.nomad import sensors
 from twodrl_envs.nomad.batched import BatchedNomadOffice
 from twodrl_envs.nomad.core import OfficeCore, Robot, counter_word
+from twodrl_envs.nomad.episode import sensor_noise_model
 from twodrl_envs.nomad.office import NomadOfficeEnv
+from twodrl_envs.nomad.sensors import NoiseModel
 
 RECORDED = "recorded:"
 """Prefix of ``database="recorded:K:SEED"``: the stand-in robot's recording of the env's map, made on demand."""
+READINGS = ("all", "fit", "held_out")
+"""What a replay robot replays of each cell's recordings (:func:`split_readings`)."""
+NOISE_SALT = np.uint64(0x5DEECE66D)
+"""XORed into a replay robot's episode key for its ``sensor_noise`` draws, so they are apart from the reading picks."""
+HOLD_OUT = 4
+"""One in this many of a cell's recordings (rounded up, the last ones recorded) is held out (:func:`split_readings`)."""
+
+
+def split_readings(counts: np.ndarray, readings: str) -> np.ndarray:
+    """Which recordings ``(sum(counts),)`` bool a replay robot with option ``readings`` replays, of a database whose
+    cells hold ``counts`` recordings each, grouped by cell.
+
+    ``"all"``: every one. ``"held_out"``: of a cell with ``n >= 2`` recordings, its last ``ceil(n / HOLD_OUT)``
+    (from the recorder's last tours or the survey's last passes: other drifts and pings than the rest);
+    ``"fit"``: the others. A cell with one recording keeps it in both, as it cannot be split. Training on
+    ``"fit"`` and checking on ``"held_out"`` tests the policy on readings it was not trained on, as the robot's own
+    will be.
+
+    :raises ValueError: if ``readings`` is not one of :data:`READINGS`
+    """
+    if readings not in READINGS:
+        raise ValueError(f"readings must be one of {READINGS}, got {readings!r}")
+    counts = np.asarray(counts, dtype=np.int64)
+    cell = np.repeat(np.arange(len(counts)), counts)
+    rank = np.arange(len(cell)) - np.repeat(np.cumsum(counts) - counts, counts)
+    held = np.where(counts >= 2, -(-counts // HOLD_OUT), 0)[cell]
+    last = rank >= counts[cell] - held
+    if readings == "all":
+        return np.ones(len(cell), dtype=bool)
+    return last | (held == 0) if readings == "held_out" else ~last
 
 
 def recorded(core: OfficeCore, database: str) -> SensorDatabase:
@@ -53,10 +85,18 @@ class ReplayRobot(Robot):
 
     A move collides where the map's swept-disc test says so or where it would enter a cell without
     recordings (the recorded free space); a reading is reading ``hash(key, step) mod count`` of the
-    cell's recordings.
+    cell's recordings; of all of them, or of the ``readings`` :func:`split_readings` picks.
     """
 
-    def __init__(self, core: OfficeCore, database: str | Path | SensorDatabase | None) -> None:
+    held_out_readings = True
+
+    def __init__(
+        self,
+        core: OfficeCore,
+        database: str | Path | SensorDatabase | None,
+        readings: str = "all",
+        noise: NoiseModel | None = None,
+    ) -> None:
         super().__init__(core)
         if isinstance(database, SensorDatabase):
             database.check_map(core)
@@ -66,21 +106,30 @@ class ReplayRobot(Robot):
         else:
             db = load_database(database, core)
         self.database = db
-        self.readings = db.readings()
-        self.counts = db.counts.astype(np.uint64)
-        self.offsets = db.offsets
+        replayed = split_readings(db.counts, readings)
+        counts = np.bincount(np.repeat(np.arange(len(db.counts)), db.counts)[replayed], minlength=len(db.counts))
+        self.ranges_cm = db.ranges_cm[replayed]
+        self.readings = sensors.normalise(self.ranges_cm)
+        self.noise = noise
+        self.counts = counts.astype(np.uint64)
+        self.offsets = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
         moves = core.lattice.moves.copy()
         moves[(moves >= 0) & (db.counts[np.maximum(moves, 0)] == 0)] = -1
         self.moves = moves
-        self._offsets, self._counts = self.offsets.tolist(), db.counts.tolist()
+        self._offsets, self._counts = self.offsets.tolist(), counts.tolist()
 
     def cell_readings(self, cells: np.ndarray, keys: np.ndarray, steps: np.ndarray) -> np.ndarray:
         """Recorded readings ``(n, 32)`` of ``cells``: reading ``hash(key, step) mod count`` of each."""
         word = sensors.counter_hash(keys, steps)[:, 0]
-        return self.readings[self.offsets[cells] + (word % self.counts[cells]).astype(np.int64)]
+        rows = self.offsets[cells] + (word % self.counts[cells]).astype(np.int64)
+        if self.noise is None:
+            return self.readings[rows]
+        return sensors.normalise(self.noise.apply(self.ranges_cm[rows], keys ^ NOISE_SALT, steps))
 
     def cell_reading(self, cell: int, key: int, step: int) -> np.ndarray:
         """:meth:`cell_readings` of one robot, in Python integers (a single env's step is mostly call overhead)."""
+        if self.noise is not None:
+            return super().cell_reading(cell, key, step)
         return self.readings[self._offsets[cell] + counter_word(key, step) % self._counts[cell]]
 
     def check_start(self, xy: np.ndarray, cell: int) -> None:
@@ -89,11 +138,17 @@ class ReplayRobot(Robot):
 
 
 def replay_robot(
-    core: OfficeCore, generators: object, *, database: str | Path | SensorDatabase | None = None
+    core: OfficeCore,
+    generators: object,
+    *,
+    database: str | Path | SensorDatabase | None = None,
+    readings: str = "all",
+    sensor_noise: bool | NoiseModel | None = None,
 ) -> ReplayRobot:
-    """The replay robot of ``NomadOfficeMemorable-v0`` with its option ``database`` (:class:`ReplayRobot`); it
-    draws from no generator."""
-    return ReplayRobot(core, database)
+    """The replay robot of ``NomadOfficeMemorable-v0`` with its options ``database``, ``readings`` and
+    ``sensor_noise`` (:func:`~twodrl_envs.nomad.episode.sensor_noise_model`) (:class:`ReplayRobot`); it draws from
+    no generator."""
+    return ReplayRobot(core, database, readings, sensor_noise_model(sensor_noise))
 
 
 class NomadOfficeMemorableEnv(NomadOfficeEnv):
@@ -102,7 +157,11 @@ class NomadOfficeMemorableEnv(NomadOfficeEnv):
     ``database`` is a file written by :func:`twodrl_envs.memorable.database.save_database`, a loaded
     :class:`~twodrl_envs.memorable.database.SensorDatabase`, ``None`` for the shipped one (realistic
     sensor model, K = 8), or ``"recorded:K:SEED"`` to record one in ``map`` now (:func:`recorded`); it must
-    have been recorded in ``map``. Motion is on the lattice, so
+    have been recorded in ``map``. ``readings`` (one of :data:`READINGS`, default ``"all"``) replays every
+    recording, or a split of each cell's (:func:`split_readings`): ``"fit"`` to train on, ``"held_out"`` to check
+    on. ``sensor_noise`` (as ``NomadOffice-v0``'s: ``True`` the default
+    :class:`~twodrl_envs.nomad.sensors.NoiseModel`) adds per-step noise to the replayed readings. Motion is on the
+    lattice, so
     ``options["position"]`` must be a recorded cell. The robot is a :class:`ReplayRobot` (``env.robot``).
     """
 
