@@ -26,10 +26,6 @@ facts (a class method ``task_facts(**options)``, e.g. :func:`twodrl_envs.nomad.t
 * where readings vary (revision 2): **goal checks of** :data:`VARYING_CHECK_EPISODES` **episodes**, as many as the
   train command's final test, so that a check that stops training and the final test read the same noise
   (5 deterministic episodes from the start are one episode repeated on exact readings, but not on varying ones).
-* where the env replays recordings it can split (revision 3, the fact ``held_out_readings``): training replays
-  three in four of each cell's recordings (the env's ``readings="fit"``) and the goal checks and tests the rest
-  (``readings="held_out"``), so that a check that stops training reads recordings the policy was not trained on,
-  as a robot's own readings will be.
 
 ``r_R >= 0`` and ``r_P >= 0`` keep their meaning: nothing here changes an evaluation. The rules were set on the
 development maps (``docs/own_office.md``'s example, the shipped ``corridor``, generated map seeds 0-99) before any
@@ -54,7 +50,7 @@ VARYING_CHECK_EPISODES = 20
 """Episodes of a goal check where readings vary (revision 2)."""
 REVISION = 2
 """The revision of the rule :func:`derive` applies by default (module docstring); 1 is the rule before."""
-REVISIONS = (1, 2, 3)
+REVISIONS = (1, 2)
 MEASURED_MOVES = 200
 """The longest shortest path the rule was measured on (``docs/own_office.md``); beyond it, a warning."""
 
@@ -101,9 +97,6 @@ def derive(facts: dict[str, Any], revision: int = REVISION) -> Derived:
     varying = revision >= 2 and bool(facts.get("varying_readings"))
     check_episodes = VARYING_CHECK_EPISODES if varying else None
     eval_env_kwargs = {"starts": "map", "max_episode_steps": limit}
-    held_out = revision >= 3 and bool(facts.get("held_out_readings"))
-    if held_out:
-        env_kwargs["readings"], eval_env_kwargs["readings"] = "fit", "held_out"
     note = (
         f"settings derived from the map ({size_class(moves)}: shortest path {moves} moves, farthest start "
         f"{facts['farthest_start']}): gamma {hyperparams['gamma']}, time limit "
@@ -116,8 +109,6 @@ def derive(facts: dict[str, Any], revision: int = REVISION) -> Derived:
         note += f", progress signal {env_kwargs['progress']}"
     if check_episodes is not None:
         note += f", goal checks of {check_episodes} episodes (readings vary)"
-    if held_out:
-        note += " on recordings held out from training"
     if moves > MEASURED_MOVES:
         note += (
             f"; WARNING: the shortest path is longer than the {MEASURED_MOVES} moves these settings were measured "

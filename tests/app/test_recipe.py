@@ -38,19 +38,9 @@ def test_varying_readings_get_checks_as_long_as_the_final_test(varying: bool) ->
     assert derive(_facts(40, varying=varying), revision=1).check_episodes is None
 
 
-@pytest.mark.parametrize("held_out", [True, False])
-def test_revision_3_checks_on_recordings_held_out_from_training(held_out: bool) -> None:
-    facts = {**_facts(40, varying=True), "held_out_readings": held_out}
-    derived = derive(facts, revision=3)
-    assert derived.env_kwargs.get("readings") == ("fit" if held_out else None)
-    assert derived.eval_env_kwargs.get("readings") == ("held_out" if held_out else None)
-    assert ("held out from training" in derived.note) == held_out
-    assert "readings" not in derive(facts).env_kwargs | derive(facts).eval_env_kwargs  # the default is revision 2
-
-
-@pytest.mark.parametrize("revision", [0, 4, "2", None])
+@pytest.mark.parametrize("revision", [0, 3, "2", None])
 def test_an_unknown_revision_is_named(revision: object) -> None:
-    with pytest.raises(ValueError, match=f"revision must be one of \\(1, 2, 3\\), got {revision!r}"):
+    with pytest.raises(ValueError, match=f"revision must be one of \\(1, 2\\), got {revision!r}"):
         derive(_facts(40), revision=revision)  # type: ignore[arg-type]
 
 

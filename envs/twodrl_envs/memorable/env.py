@@ -88,8 +88,6 @@ class ReplayRobot(Robot):
     cell's recordings; of all of them, or of the ``readings`` :func:`split_readings` picks.
     """
 
-    held_out_readings = True
-
     def __init__(
         self,
         core: OfficeCore,

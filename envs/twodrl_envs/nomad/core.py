@@ -289,9 +289,6 @@ class Robot:
     on_lattice: bool = True
     varying_readings: bool = True
     """Whether a cell's readings vary from visit to visit (noise, recordings): learning them takes more samples."""
-    held_out_readings: bool = False
-    """Whether the robot replays recordings that its env's ``readings`` option splits into ones to train on and ones
-    held out (:func:`twodrl_envs.memorable.env.split_readings`)."""
 
     def __init__(self, core: OfficeCore) -> None:
         self.core = core

@@ -8,9 +8,7 @@ start, a 300-step time limit) are its task. On another map (a user's own, a gene
   cell an episode may start at (the cells reachable from the start);
 * ``varying_readings``: whether a cell's readings vary from visit to visit (sensor noise, a recorded database,
   the stand-in robot: :attr:`~twodrl_envs.nomad.core.Robot.varying_readings`); ``on_lattice``: whether the
-  robot moves on the lattice (then the ``progress`` option exists); ``held_out_readings``: whether the robot replays
-  recordings that the env's ``readings`` option splits into ones to train on and ones held out
-  (:attr:`~twodrl_envs.nomad.core.Robot.held_out_readings`);
+  robot moves on the lattice (then the ``progress`` option exists);
 * ``time_limit``: the map's episode time limit, ``max(300, 3 farthest_start)`` (the paper's 300 on its maps): the
   env's own, as a Gymnasium spec's ``max_episode_steps`` is.
 
@@ -61,5 +59,4 @@ def task_facts(robot: Robot) -> dict[str, Any] | None:
         "time_limit": max(MIN_TIME_LIMIT, 3 * farthest),
         "varying_readings": bool(robot.varying_readings),
         "on_lattice": bool(robot.on_lattice),
-        "held_out_readings": bool(robot.held_out_readings),
     }
