@@ -70,6 +70,7 @@ OPTION_VALUES: dict[str, Callable[[str | None], Any]] = {
     "starts": lambda _: "uniform",
     "progress": lambda _: 0.05,
     "max_episode_steps": lambda _: 25,
+    "readings": lambda _: "held_out",
 }
 
 
