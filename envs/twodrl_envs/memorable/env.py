@@ -37,7 +37,7 @@ def split_readings(counts: np.ndarray, readings: str) -> np.ndarray:
     cells hold ``counts`` recordings each, grouped by cell.
 
     ``"all"``: every one. ``"held_out"``: of a cell with ``n >= 2`` recordings, its last ``ceil(n / HOLD_OUT)``
-    (from the recorder's last tours or the survey's last passes: other drifts and pings than the rest);
+    (the recorder's last tours, a survey's last draws at the cell: other drifts and pings than the rest);
     ``"fit"``: the others. A cell with one recording keeps it in both, as it cannot be split. Training on
     ``"fit"`` and checking on ``"held_out"`` tests the policy on readings it was not trained on, as the robot's own
     will be.
@@ -47,12 +47,12 @@ def split_readings(counts: np.ndarray, readings: str) -> np.ndarray:
     if readings not in READINGS:
         raise ValueError(f"readings must be one of {READINGS}, got {readings!r}")
     counts = np.asarray(counts, dtype=np.int64)
+    if readings == "all":
+        return np.ones(int(counts.sum()), dtype=bool)
     cell = np.repeat(np.arange(len(counts)), counts)
     rank = np.arange(len(cell)) - np.repeat(np.cumsum(counts) - counts, counts)
     held = np.where(counts >= 2, -(-counts // HOLD_OUT), 0)[cell]
     last = rank >= counts[cell] - held
-    if readings == "all":
-        return np.ones(len(cell), dtype=bool)
     return last | (held == 0) if readings == "held_out" else ~last
 
 
@@ -107,7 +107,7 @@ class ReplayRobot(Robot):
         replayed = split_readings(db.counts, readings)
         counts = np.bincount(np.repeat(np.arange(len(db.counts)), db.counts)[replayed], minlength=len(db.counts))
         self.ranges_cm = db.ranges_cm[replayed]
-        self.readings = sensors.normalise(self.ranges_cm)
+        self.readings = db.readings()[replayed]
         self.noise = noise
         self.counts = counts.astype(np.uint64)
         self.offsets = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
@@ -159,8 +159,7 @@ class NomadOfficeMemorableEnv(NomadOfficeEnv):
     recording, or a split of each cell's (:func:`split_readings`): ``"fit"`` to train on, ``"held_out"`` to check
     on. ``sensor_noise`` (as ``NomadOffice-v0``'s: ``True`` the default
     :class:`~twodrl_envs.nomad.sensors.NoiseModel`) adds per-step noise to the replayed readings. Motion is on the
-    lattice, so
-    ``options["position"]`` must be a recorded cell. The robot is a :class:`ReplayRobot` (``env.robot``).
+    lattice, so ``options["position"]`` must be a recorded cell. The robot is a :class:`ReplayRobot` (``env.robot``).
     """
 
     robot_factory = replay_robot
