@@ -9,6 +9,7 @@ layout (``observation="cell"`` included) are those of ``NomadOffice-v0``.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from pathlib import Path
 
@@ -105,12 +106,12 @@ class ReplayRobot(Robot):
             db = load_database(database, core)
         self.database = db
         replayed = split_readings(db.counts, readings)
-        counts = np.bincount(np.repeat(np.arange(len(db.counts)), db.counts)[replayed], minlength=len(db.counts))
-        self.ranges_cm = db.ranges_cm[replayed]
-        self.readings = db.readings()[replayed]
-        self.noise = noise
+        cell = np.repeat(np.arange(len(db.counts)), db.counts)
+        counts = np.bincount(cell[replayed], minlength=len(db.counts))
+        kept = dataclasses.replace(db, counts=counts, ranges_cm=db.ranges_cm[replayed])  # the replayed recordings
+        self.ranges_cm, self.readings, self.offsets = kept.ranges_cm, kept.readings(), kept.offsets
         self.counts = counts.astype(np.uint64)
-        self.offsets = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+        self.noise = noise
         moves = core.lattice.moves.copy()
         moves[(moves >= 0) & (db.counts[np.maximum(moves, 0)] == 0)] = -1
         self.moves = moves
