@@ -86,9 +86,12 @@ def _row(map_: str, size: str, moves: int, algo: str, seed: int, rate: float, re
 
 def _with(command: str, extra: list[str]) -> str:
     """The train ``command`` with ``extra``: ``key:value`` items join its ``--env-kwargs`` (a new one if none),
-    ``--flag value`` items go at its end."""
-    options = [a for a in extra if not a.startswith("-") and ":" in a and not a.lstrip("-").isdigit()]
-    flags = [a for a in extra if a not in options]
+    ``--flag value`` items go at its end (``--hyperparams key:value`` too: an item right after a flag is its
+    value)."""
+    options, flags = [], []
+    for i, a in enumerate(extra):
+        is_option = not a.startswith("-") and ":" in a and not (i > 0 and extra[i - 1].startswith("--"))
+        (options if is_option else flags).append(a)
     if options:
         kwargs = " ".join(options)
         command = (
