@@ -46,6 +46,26 @@ def test_batched_equals_single_envs(sensor_noise, odometry):
     assert n_done > N_ENVS  # autoreset was exercised
 
 
+
+@pytest.mark.parametrize("seeds", [None, [3, None, 5, None, None, 8]])
+def test_a_reset_without_a_seed_continues_each_sub_env_as_a_single_env_does(seeds):
+    """After a seeded reset, ``reset()`` (or a seed for some sub-envs only) keeps the others' generators and noise
+    keys, as ``env.reset()`` of a single env does: a goal check's episodes (a reset per check) are reproducible."""
+    kwargs = {"sensor_noise": True, "max_episode_steps": 40, "starts": "uniform"}
+    batched = BatchedNomadOffice(N_ENVS, **kwargs)
+    singles = [gym.make("twodrl_envs:NomadOffice-v0", **kwargs) for _ in range(N_ENVS)]
+    actions = np.random.default_rng(1).integers(4, size=(30, N_ENVS))
+    assert_batched_equals_singles(batched, singles, SEED, actions)
+    obs, _ = batched.reset(seed=seeds)
+    singles_obs = [env.reset(seed=None if seeds is None else seeds[i])[0] for i, env in enumerate(singles)]
+    np.testing.assert_array_equal(obs, np.stack(singles_obs))
+    for row in actions:
+        obs, *_ = batched.step(row)
+        for i, env in enumerate(singles):
+            o, _, te, tr, _ = env.step(int(row[i]))
+            o = env.reset()[0] if te or tr else o
+            np.testing.assert_array_equal(o, obs[i])
+
 # --- the single env's Python fast path on the lattice == Episodes' arrays -----------------------------------------
 
 FAST_PATH_ENVS = [

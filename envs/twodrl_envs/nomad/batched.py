@@ -92,7 +92,9 @@ class BatchedNomadOffice(VectorEnv):
     def reset(
         self, *, seed: int | Sequence[int | None] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
-        """Reset every robot to the start; ``seed=s`` seeds sub-env ``i`` with ``s + i``."""
+        """Reset every robot to the start; ``seed=s`` seeds sub-env ``i`` with ``s + i``. A sub-env given no seed
+        keeps its generator and noise base key, as a single env reset without a seed does (Gymnasium's
+        ``Env.reset``); one never seeded draws them from the OS."""
         if options:
             raise ValueError(f"{type(self).__name__}.reset takes no options, got {options!r}")
         if seed is None or isinstance(seed, int | np.integer):
@@ -101,9 +103,17 @@ class BatchedNomadOffice(VectorEnv):
             seeds = list(seed)
             if len(seeds) != self.num_envs:
                 raise ValueError(f"seed must be an int or {self.num_envs} seeds, got {len(seeds)}")
-        self._np_random, self._np_random_seed = seeding.np_random(seeds[0])
-        self._rngs = [self._np_random] + [seeding.np_random(s)[0] for s in seeds[1:]]
-        self._counters.seed(self._rngs)
+        fresh = not self._rngs
+        rows = np.array([fresh or s is not None for s in seeds])
+        drawn = [seeding.np_random(s) for s, row in zip(seeds, rows, strict=True) if row]
+        if fresh:
+            self._rngs.extend(rng for rng, _ in drawn)  # the robot reads this list (_generators)
+        else:
+            for i, (rng, _) in zip(np.flatnonzero(rows), drawn, strict=True):
+                self._rngs[i] = rng
+        if rows[0]:
+            self._np_random, self._np_random_seed = drawn[0]
+        self._counters.seed([rng for rng, _ in drawn], rows)
         self._restart(self._all)
         obs = self._observe(self._all)
         zeros = np.zeros(self.num_envs, dtype=bool)

@@ -187,10 +187,12 @@ class Counters:
         self.steps = np.zeros(n, dtype=np.int64)
         self.limit = math.inf if max_episode_steps is None else max_episode_steps
 
-    def seed(self, rngs: Sequence[np.random.Generator]) -> None:
-        """Draw each robot's base key from its seeded generator ``rngs[i]``; its next episode is its first."""
-        self.base[:] = [base_key(rng) for rng in rngs]
-        self.episode[:] = -1
+    def seed(self, rngs: Sequence[np.random.Generator], rows: np.ndarray | None = None) -> None:
+        """Draw the base key of each robot of ``rows`` (a bool mask; all by default) from its seeded generator, in
+        ``rngs`` (one per robot of ``rows``); its next episode is its first."""
+        rows = np.ones(len(self.base), dtype=bool) if rows is None else rows
+        self.base[rows] = [base_key(rng) for rng in rngs]
+        self.episode[rows] = -1
 
     def begin(self, rows: np.ndarray) -> None:
         """Count a new episode of the robots ``rows`` (a bool mask): its number, its noise key, no steps yet."""
