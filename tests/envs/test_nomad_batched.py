@@ -46,7 +46,6 @@ def test_batched_equals_single_envs(sensor_noise, odometry):
     assert n_done > N_ENVS  # autoreset was exercised
 
 
-
 @pytest.mark.parametrize("seeds", [None, [3, None, 5, None, None, 8]])
 def test_a_reset_without_a_seed_continues_each_sub_env_as_a_single_env_does(seeds):
     """After a seeded reset, ``reset()`` (or a seed for some sub-envs only) keeps the others' generators and noise
@@ -65,6 +64,7 @@ def test_a_reset_without_a_seed_continues_each_sub_env_as_a_single_env_does(seed
             o, _, te, tr, _ = env.step(int(row[i]))
             o = env.reset()[0] if te or tr else o
             np.testing.assert_array_equal(o, obs[i])
+
 
 # --- the single env's Python fast path on the lattice == Episodes' arrays -----------------------------------------
 
